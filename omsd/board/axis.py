@@ -1,0 +1,444 @@
+"""One axis of a board: its registers, its motion, its switches and its encoder.
+
+Positions live in two frames. The *counter* is the board's position register (RP, LP, HM, RM);
+the *physical* position is where the carriage really is, in the frame of the world
+(:mod:`omsd.board.world`), and it is what limit and home switches and the encoder see.
+``physical = counter + phys_offset``; loading the counter moves the offset, not the carriage.
+A stalled motor (injected fault) freezes the physical position while pulses keep counting.
+
+Motion is a :class:`~omsd.board.profiles.Trajectory` in the counter frame. Everything that
+happens by itself (a move ends, a switch is reached, an IN threshold is passed, a settling time
+runs out) is found analytically and reported by :meth:`Axis.next_event_time`, quantized onto the
+sample grid, so the board can sleep until then.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from decimal import Decimal
+from enum import Enum, auto
+from typing import TYPE_CHECKING
+
+from omsd.board import profiles as pf
+from omsd.board.profiles import Trajectory
+from omsd.board.queue import CommandQueue, SyncGroup
+from omsd.board.world import AxisWorld, SwitchType
+
+if TYPE_CHECKING:
+    from omsd.board.board import Board
+
+
+class Motion(Enum):
+    IDLE = auto()
+    MOVE = auto()  # point to point (GO/GD), the only kind soft limits apply to
+    JOG = auto()
+    HOME = auto()
+    STOP = auto()
+    STAIRCASE = auto()
+    STREAM = auto()
+    CONTOUR = auto()
+    HOLD = auto()  # position-hold correction
+    TRACK = auto()
+
+
+@dataclass
+class Wait:
+    """What the axis's current queue op waits for before the queue may go on."""
+
+    kind: str  # "motion", "time", "group", "input", "inpos"
+    until: float | None = None
+    group: SyncGroup | None = None
+    round: int = 0
+    bit: int = 0
+    then: Callable[[float], None] | None = None  # run when the wait is over
+
+
+@dataclass
+class Pending:
+    """A move set up by MA/MR/ML/MT, waiting for GO/GD."""
+
+    kind: str  # "abs" or "rel"
+    value: float  # in user counts (encoder counts on encoder axes)
+    linear: SyncGroup | None = None  # ML/MT interpolation group
+
+
+@dataclass
+class HomeSearch:
+    position: float  # value loaded into the counter at home (HM#/HR#)
+    kill: bool  # KM/KR: stop at once, do not load the counter
+    direction: int
+    prev: bool  # home condition at the previous look
+    index_points: tuple[float, ...] = ()  # HE mode: physical points where home is true
+
+
+class Axis:
+    def __init__(self, board: Board, index: int, letter: str, world: AxisWorld) -> None:
+        self.board = board
+        self.index = index
+        self.letter = letter
+        self.world = world
+        self.has_encoder = board.model.has_encoder(letter)
+        self.done_bit = 1 << board.model.done_bits[index]
+        self.queue = CommandQueue(board.model.queue_size)
+        self.phys_offset = world.start_position
+        self.traj = Trajectory.at_rest(board.clock.origin, 0.0)
+        self.stall_phys: float | None = None
+        self.reset(board.clock.origin, keep_position=False)
+
+    # -- power-up / RS ------------------------------------------------------------------------
+
+    def reset(self, t: float, keep_position: bool = True) -> None:
+        """Power-up defaults (PC48 §8.1 of the digest; each value from its command's text)."""
+        model = self.board.model
+        phys = self.phys(t) if keep_position else self.world.start_position
+        self.traj = Trajectory.at_rest(t, 0.0)
+        self.motion = Motion.IDLE
+        self.phys_offset = phys if self.stall_phys is None else self.stall_phys
+        self.vl = float(model.default_velocity)
+        self.ac = float(model.default_acceleration)
+        self.vb = 0.0
+        self.uu: Decimal | None = None
+        self.ratio = 1.0  # encoder counts per motor count (ER)
+        self.hv = 0.0
+        self.hg = 1.0
+        self.hd = 0.0
+        self.es = 0.0
+        self.limits_on = True
+        self.home_high = False
+        self.home_encoder = False
+        self.hold = False
+        self.slip_detect = False
+        self.tracking = False
+        self.done = False
+        self.slipped = False
+        self.direction = 1
+        self.aux = True
+        self.pa: bool | None = None  # aux state during a move in PA mode
+        self.se_ms = 0
+        self.aux_timer: float | None = None
+        self.in_arm: tuple[float, SyncGroup] | None = None
+        self.in_fire: float | None = None
+        self.pending: Pending | None = None
+        self.home: HomeSearch | None = None
+        self.home_last_phys = phys
+        self.wait: Wait | None = None
+        self.sensor_check: float | None = None
+        self.limit_latched: int = 0  # direction of the limit last run into, for RA
+        self.hold_goal = 0.0
+        self.in_position = True
+        self.outputs: list[tuple[float, tuple[str, int, bool]]] = []  # contour I/O actions
+        self.queue.flush()
+        self.enc_base = 0.0
+        self.enc_phys = phys
+        self.track_enc = 0.0
+        self.track_counter = 0.0
+        self._cache: tuple[float, str] | None = None
+
+    # -- frames -------------------------------------------------------------------------------
+
+    def position(self, t: float) -> float:
+        return self.traj.position(t)
+
+    def counter(self, t: float) -> int:
+        """The position register: whole steps emitted so far."""
+        x = self.traj.position(t)
+        return math.floor(x + 0.5) if self.motion is Motion.IDLE else _steps(x, self.traj.x0)
+
+    def velocity(self, t: float) -> float:
+        return self.traj.velocity(t)
+
+    def acceleration(self, t: float) -> float:
+        return self.traj.acceleration(t)
+
+    def phys(self, t: float) -> float:
+        if self.stall_phys is not None:
+            return self.stall_phys
+        return self.traj.position(t) + self.phys_offset
+
+    def moving(self, t: float) -> bool:
+        return self.motion is not Motion.IDLE
+
+    def load_counter(self, t: float, value: float) -> None:
+        """Set the position register to ``value`` at ``t`` without moving the carriage."""
+        x = self.traj.position(t)
+        self.phys_offset += x - value
+        self.traj = _rebased(self.traj, t, value - x)
+        self.invalidate()
+
+    # -- encoder ------------------------------------------------------------------------------
+
+    def encoder(self, t: float) -> int:
+        return math.floor(self.enc_base + self.ratio * (self.phys(t) - self.enc_phys) + 0.5)
+
+    def anchor_encoder(self, t: float, value: float | None = None) -> None:
+        """Re-anchor the encoder model at ``t`` (LP loads ``value``; ER keeps the count)."""
+        self.enc_base = float(self.encoder(t)) if value is None else value
+        self.enc_phys = self.phys(t)
+        self.anchor_tracking(t)
+
+    def anchor_tracking(self, t: float) -> None:
+        """Take the present encoder/counter relation as the no-slip reference."""
+        self.track_enc = float(self.encoder(t))
+        self.track_counter = self.position(t)
+        self.invalidate()
+
+    def slip_error(self, t: float) -> float:
+        expected = self.track_enc + self.ratio * (self.position(t) - self.track_counter)
+        return self.encoder(t) - expected
+
+    def to_motor(self, value: float) -> float:
+        """User counts (encoder counts on an encoder axis) to motor steps (PC48 §6.15 ER)."""
+        return value / self.ratio if self.has_encoder else value
+
+    # -- switches -----------------------------------------------------------------------------
+
+    def limit_active(self, direction: int, t: float) -> bool:
+        forced = self.board.world.forced_limit(self.index, direction)
+        if forced is not None:
+            return forced
+        p = self.phys(t)
+        if direction > 0:
+            return p >= self.world.positive_limit
+        return p <= self.world.negative_limit
+
+    def home_switch_activated(self, t: float) -> bool:
+        forced = self.board.world.forced_home.get(self.index)
+        if forced is not None:
+            return forced
+        return self.world.home_low <= self.phys(t) < self.world.home_high
+
+    def home_line_low(self, t: float) -> bool:
+        activated = self.home_switch_activated(t)
+        if self.world.home_switch is SwitchType.NORMALLY_OPEN:
+            return activated
+        return not activated
+
+    def home_sensed(self, t: float) -> bool:
+        """The home input after the HH/HL sense: what RA reports as ``H``."""
+        return self.home_line_low(t) != self.home_high
+
+    def encoder_home(self, t: float) -> bool:
+        """HE mode (PC48 §6.18): index AND quadrant AND the low-true home enable."""
+        if not self.home_line_low(t):
+            return False
+        cpr = self.world.encoder_counts_per_rev
+        return cpr > 0 and (self.encoder(t) - self.world.encoder_index) % cpr == 0
+
+    def home_condition(self, t: float) -> bool:
+        return self.encoder_home(t) if self.home_encoder else self.home_sensed(t)
+
+    def direction_at(self, t: float) -> int:
+        v = self.traj.velocity(t)
+        if v == 0.0 and self.traj.moving_at(t):
+            v = self.traj.velocity(min(t + 1e-6, (t + self.traj.end_time) / 2))
+        if v > 0:
+            return 1
+        if v < 0:
+            return -1
+        return 0
+
+    # -- motion -------------------------------------------------------------------------------
+
+    def invalidate(self) -> None:
+        self._cache = None
+
+    def begin(
+        self, t: float, pieces: list[pf.Piece], motion: Motion, final: float | None = None
+    ) -> None:
+        """Start new motion at ``t`` from wherever the axis is (position and velocity)."""
+        x = self.traj.position(t)
+        if not pieces:
+            self.traj = Trajectory.at_rest(t, x if final is None else final)
+            self.motion = Motion.IDLE
+        else:
+            self.traj = Trajectory(t, x, pieces, final)
+            self.motion = motion
+            if motion is not Motion.HOLD:
+                self.in_position = False
+        self.sensor_check = t
+        self.invalidate()
+
+    def settle(self, t: float) -> None:
+        """Come to rest at the nearest whole step (end of motion)."""
+        x = self.traj.position(t)
+        self.traj = Trajectory.at_rest(t, float(math.floor(x + 0.5)))
+        self.motion = Motion.IDLE
+        self.invalidate()
+
+    def halt(self, t: float) -> None:
+        """Stop pulses at once (KL, hard limit, KM/KR at home)."""
+        x = self.traj.position(t)
+        self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
+        self.motion = Motion.IDLE
+        self.home = None
+        self.invalidate()
+
+    def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
+        """Ramp down to rest at AC (ST, SA, soft limit, after home)."""
+        v = self.traj.velocity(t)
+        if v == 0.0:
+            self.halt(t)
+            return
+        self.begin(t, pf.velocity_change(v, 0.0, self.ac), motion)
+
+    def end_tick(self) -> float | None:
+        if self.motion is Motion.IDLE or not self.traj.is_finite:
+            return None
+        return self.board.clock.at_or_after(self.traj.end_time)
+
+    # -- what happens next --------------------------------------------------------------------
+
+    def next_event_time(self) -> float | None:
+        if self._cache is None:
+            self._cache = self._next_event()
+        t = self._cache[0]
+        return None if math.isinf(t) else t
+
+    def _next_event(self) -> tuple[float, str]:
+        best = (math.inf, "")
+        candidates: list[tuple[float | None, str]] = [
+            (self.end_tick(), "end"),
+            (self.sensor_check, "sensor"),
+            (self.in_fire, "in"),
+            (self.aux_timer, "aux"),
+            (self.outputs[0][0] if self.outputs else None, "output"),
+        ]
+        if self.wait is not None and self.wait.until is not None:
+            candidates.append((self.wait.until, "wait"))
+        if self.motion is not Motion.IDLE and self.stall_phys is None:
+            candidates.append((self._next_crossing(), "sensor"))
+        if self.slip_detect and self.stall_phys is not None and self.motion is not Motion.IDLE:
+            candidates.append((self._slip_crossing(), "sensor"))
+        for when, what in candidates:
+            if when is not None and when < best[0]:
+                best = (when, what)
+        return best
+
+    def _levels(self, t: float) -> list[tuple[float, bool]]:
+        """Physical positions whose crossing the board must notice, with the side that counts
+        (``True``: reaching at or above the level)."""
+        levels: list[tuple[float, bool]] = []
+        w = self.world
+        p = self.phys(t)
+        if self.limits_on:
+            if p < w.positive_limit:
+                levels.append((w.positive_limit, True))
+            if p > w.negative_limit:
+                levels.append((w.negative_limit, False))
+        if self.home is not None:
+            if self.home.index_points:
+                for point in self.home.index_points:
+                    levels.append((point, point > p))
+            else:
+                eps = 1e-9
+                for edge in (w.home_low, w.home_high):
+                    if p < edge:
+                        levels.append((edge, True))
+                    else:
+                        levels.append((edge - eps, False))
+        return levels
+
+    def _first_tick(self, level_counter: float, above: bool, t_from: float) -> float | None:
+        clock = self.board.clock
+        when = self.traj.first_time(level_counter, above, t_from)
+        while when is not None:
+            tick = clock.at_or_after(when)
+            if tick <= t_from:
+                tick = clock.after(t_from)
+            x = self.traj.position(tick)
+            if (x >= level_counter) if above else (x <= level_counter):
+                return tick
+            nxt = self.traj.first_time(level_counter, above, tick)
+            if nxt is None or nxt <= when:
+                return None if nxt is None else clock.after(tick)
+            when = nxt
+        return None
+
+    def _next_crossing(self) -> float | None:
+        t = self.board.now
+        best: float | None = None
+        for level, above in self._levels(t):
+            tick = self._first_tick(level - self.phys_offset, above, t)
+            if tick is not None and (best is None or tick < best):
+                best = tick
+        return best
+
+    def _slip_crossing(self) -> float | None:
+        t = self.board.now
+        stall_enc = float(self.encoder(t))
+        best: float | None = None
+        for sign in (1, -1):
+            # slip_error = stall_enc - track_enc - ratio (x - track_counter) crosses -/+ ES
+            level = self.track_counter + (stall_enc - self.track_enc + sign * self.es) / self.ratio
+            tick = self._first_tick(level + sign * 1e-6, sign > 0, t)
+            if tick is not None and (best is None or tick < best):
+                best = tick
+        return best
+
+    def due(self) -> str:
+        if self._cache is None:
+            self._cache = self._next_event()
+        return self._cache[1]
+
+
+def _steps(x: float, origin: float) -> int:
+    """Whole steps emitted from ``origin`` toward ``x`` (pulses are counted, not rounded)."""
+    d = x - origin
+    eps = 1e-6
+    whole = math.floor(d + eps) if d >= 0 else math.ceil(d - eps)
+    return round(origin) + whole
+
+
+def _rebased(traj: Trajectory, t: float, shift: float) -> Trajectory:
+    """The same motion continued from ``t`` with every position shifted by ``shift``."""
+    rel = t - traj.t0
+    pieces: list[pf.Piece] = []
+    acc = 0.0
+    for piece in traj.pieces:
+        if acc + piece.duration <= rel:
+            acc += piece.duration
+            continue
+        cut = max(0.0, rel - acc)
+        pieces.append(_tail(piece, cut))
+        acc += piece.duration
+    final = traj.final + shift if math.isfinite(traj.final) else None
+    return Trajectory(t, traj.position(t) + shift, pieces, final)
+
+
+def _tail(piece: pf.Piece, cut: float) -> pf.Piece:
+    """The part of ``piece`` after ``cut``, as a piece of its own."""
+    if cut == 0.0:
+        return piece
+    rest = piece.duration - cut
+    if isinstance(piece, pf.Poly):
+        return pf.Poly(piece.v(cut), piece.a(cut), piece.j, rest)
+    if isinstance(piece, pf.Cosine):
+        return _Shifted(piece, cut, rest)
+    if isinstance(piece, pf.Decay):
+        return pf.Decay(piece.e0 * math.exp(-piece.k * cut), piece.k, rest)
+    if isinstance(piece, pf.Sinusoid):
+        return pf.Sinusoid(piece.r, piece.phase0 + piece.omega * cut, piece.omega, rest)
+    return _Shifted(piece, cut, rest)
+
+
+@dataclass(frozen=True, slots=True)
+class _Shifted:
+    """A piece observed from ``cut`` onwards."""
+
+    inner: pf.Piece
+    cut: float
+    duration: float
+
+    def x(self, tau: float) -> float:
+        return self.inner.x(self.cut + tau) - self.inner.x(self.cut)
+
+    def v(self, tau: float) -> float:
+        return self.inner.v(self.cut + tau)
+
+    def a(self, tau: float) -> float:
+        return self.inner.a(self.cut + tau)
+
+    def turning_points(self) -> list[float]:
+        return [tp - self.cut for tp in self.inner.turning_points() if tp > self.cut]

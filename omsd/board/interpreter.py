@@ -1,0 +1,312 @@
+"""The command interpreter (PC48 §6.1, §6.2, §8.2).
+
+"The commands from the PC/AT or compatible host computer are temporarily stored in a 124
+character buffer until the 68332 microprocessor can parse them. The command is then executed
+immediately or routed to separate command queues for each axis."
+
+The interpreter takes characters from the input buffer one at a time and lexes them; each
+complete command is checked against the personality's queue table for the current mode (single
+axis, AA, AM, contour definition), and handed to its handler in :mod:`omsd.board.commands`. A
+command that needs queue space the axes do not have, and WQ, *hold* the interpreter: it stops
+taking characters, the input buffer fills, and the host is held off (§6.10: a loop larger than
+the queue "will hang" the board until Control-D).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from decimal import Decimal
+from typing import TYPE_CHECKING
+
+from omsd.board.contour import ContourDefinition
+from omsd.board.events import ErrorKind
+from omsd.models.spec import Cell, Kind
+from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
+from omsd.protocol.operands import OperandError, check_range, parse_number, truncate
+
+if TYPE_CHECKING:
+    from omsd.board.axis import Axis
+    from omsd.board.board import Board
+    from omsd.board.queue import Op
+
+MAX_LOOP_DEPTH = 4
+
+
+class CommandFailed(Exception):
+    def __init__(self, kind: ErrorKind) -> None:
+        super().__init__(kind.message)
+        self.kind = kind
+
+
+class Blocked(Exception):
+    """Not enough queue space: retry the same command later."""
+
+
+@dataclass
+class LoopMark:
+    kind: str  # "LS", "WS", "WH"
+    context: str  # axis letter, or "AA" for a loop entered in AA/AM
+
+
+class Interpreter:
+    def __init__(self, board: Board) -> None:
+        self.board = board
+        self.buffer: deque[int] = deque()
+        self.capacity = board.model.input_buffer
+        commands = board.model.commands
+        self._syntax = {
+            m: (Syntax.OPERAND if spec.operand else Syntax.BARE) for m, spec in commands.items()
+        }
+        self.lexer = Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN))
+        self.pending: deque[Token] = deque()
+        self.reset()
+
+    def reset(self) -> None:
+        """RS and power-up: interpreter state to defaults (the input buffer is kept)."""
+        n = len(self.board.model.axes)
+        self.echo = False
+        self.mode = "single"
+        self.axis_index = 0
+        self.contour: ContourDefinition | None = None
+        self.loops: list[list[LoopMark]] = [[] for _ in range(n)]
+        self.while_flags: set[int] = set()
+        self.wq: list[int] | None = None
+        self.last_move: list[int] = []
+        self.mt_blocked = False
+        self.pa_entered: list[bool] = [False] * n
+        self.se_entered: list[bool] = [False] * n
+        self.ws_bits: dict[int, list[int]] = {}
+        self.lexer.reset()
+
+    # -- input ----------------------------------------------------------------------------------
+
+    def room(self) -> bool:
+        return len(self.buffer) < self.capacity
+
+    def accept(self, b: int) -> None:
+        self.buffer.append(b)
+
+    def discard_input(self) -> None:
+        self.buffer.clear()
+        self.pending.clear()
+        self.lexer.reset()
+        self.wq = None
+
+    def control_d(self, t: float) -> None:
+        """Control-D: "the same functions as the KL command. It bypasses the command
+        interpreter" (PC48 §6.9). Whatever the interpreter was stuck on is dropped."""
+        from omsd.board.commands import kill_all
+
+        self.discard_input()
+        kill_all(self, t)
+        self.board.settle(t)
+
+    def clear_flags(self) -> None:
+        """Control-Y: IC without the interpreter (PC48 §6.12)."""
+        from omsd.board.commands import clear_flags
+
+        clear_flags(self)
+
+    # -- the main loop --------------------------------------------------------------------------
+
+    def pump(self, t: float) -> bool:
+        board = self.board
+        progressed = False
+        while True:
+            if board.init_until is not None and t < board.init_until:
+                return progressed
+            if self.wq is not None:
+                if not all(board.axes[i].queue.empty for i in self.wq):
+                    return progressed
+                self.wq = None
+                progressed = True
+            if self.pending:
+                token = self.pending.popleft()
+                if not self._dispatch(token, t):
+                    self.pending.appendleft(token)
+                    return progressed
+                for axis in board.axes:
+                    board.executor.step(axis, t)
+                progressed = True
+                continue
+            if not self.buffer:
+                return progressed
+            b = self.buffer.popleft()
+            if self.echo:
+                board.reply(bytes([b]), t)
+            self.pending.extend(self.lexer.feed(b))
+            progressed = True
+
+    def _dispatch(self, token: Token, t: float) -> bool:
+        """Execute one token; False if it must wait for queue space."""
+        if isinstance(token, Garbage):
+            self.board.command_error(token.kind, token.text, t)
+            return True
+        try:
+            self._command(token, t)
+        except Blocked:
+            return False
+        except (CommandFailed, OperandError) as exc:
+            self.board.command_error(exc.kind, token.text, t)
+        return True
+
+    def _command(self, cmd: Command, t: float) -> None:
+        from omsd.board.commands import HANDLERS
+
+        model = self.board.model
+        spec = model.commands[cmd.mnemonic]
+        cell = spec.cell(self.column)
+        if cell.kind is Kind.NOT_VALID:
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        if spec.encoder_only:
+            if self.mode == "single" and self.contour is None:
+                if not self.axis.has_encoder:
+                    raise CommandFailed(ErrorKind.NO_ENCODER)
+            elif not model.encoder_option:
+                raise CommandFailed(ErrorKind.NO_ENCODER)
+        if spec.not_on_encoder_models and model.encoder_option:
+            raise CommandFailed(ErrorKind.ENCODER_MODEL)
+        if spec.single_axes is not None and self.axis.letter not in spec.single_axes:
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        if cmd.error is not None:
+            raise CommandFailed(cmd.error)
+        HANDLERS[cmd.mnemonic](self, cmd, cell, t)
+
+    # -- context --------------------------------------------------------------------------------
+
+    @property
+    def column(self) -> str:
+        if self.contour is not None:
+            return "CD"
+        return self.mode
+
+    @property
+    def mode_name(self) -> str:
+        if self.contour is not None:
+            return "AA/CD"
+        if self.mode == "single":
+            return "A" + self.axis.letter
+        return self.mode
+
+    @property
+    def axis(self) -> Axis:
+        return self.board.axes[self.axis_index]
+
+    def context_axes(self) -> list[Axis]:
+        """The axes a non-list command applies to: the current axis, or all in AA/AM."""
+        if self.mode == "single":
+            return [self.axis]
+        return list(self.board.axes)
+
+    def context_tag(self) -> str:
+        return self.axis.letter if self.mode == "single" else "AA"
+
+    # -- operands -------------------------------------------------------------------------------
+
+    def one(self, cmd: Command, required: bool = True) -> Decimal | None:
+        """The single operand of a single-axis command."""
+        fields = cmd.fields
+        if not fields or fields == (None,):
+            if required:
+                raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+            return None
+        if len(fields) > 1:
+            raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
+        assert fields[0] is not None
+        return parse_number(fields[0])
+
+    def fields(self, cmd: Command, count: int) -> list[Decimal | None]:
+        """Positional operands (ER#,#  CR#,#,#  VS#,#,#); missing ones are ``None``."""
+        fields = list(cmd.fields or ())
+        if len(fields) > count:
+            raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
+        fields += [None] * (count - len(fields))
+        return [None if f is None else parse_number(f) for f in fields]
+
+    def per_axis(self, cmd: Command, axes: list[int] | None = None) -> dict[int, Decimal]:
+        """AA-syntax operands: ``MRx#,y#,z#,...;`` with skipped fields. Fields beyond the
+        fitted axes are ignored (the manual's own ``VL100,...`` of E55 has nine fields)."""
+        order = axes if axes is not None else list(range(len(self.board.axes)))
+        out: dict[int, Decimal] = {}
+        for i, text in enumerate(cmd.fields or ()):
+            if i >= len(order):
+                break
+            if text is not None:
+                out[order[i]] = parse_number(text)
+        return out
+
+    def convert(self, axis: Axis, value: Decimal, kind: str) -> float:
+        """User units (UU) and integer truncation. ``kind``: "dist" (whole counts), "vel" and
+        "acc" (whole unless user units are on), "frac" (fractions kept: JF)."""
+        scaled = value * axis.uu if axis.uu is not None else value
+        if kind == "dist" or (kind in ("vel", "acc") and axis.uu is None):
+            return float(truncate(scaled))
+        return float(scaled)
+
+    def integer(self, value: Decimal | None, low: float, high: float) -> int:
+        if value is None:
+            raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+        n = truncate(value)
+        check_range(n, low, high)
+        return n
+
+    # -- queueing -------------------------------------------------------------------------------
+
+    def cost(self, cell: Cell, axis: Axis, contour_axes: int = 0) -> int:
+        return cell.cost(self.board.ramp.kind, self.board.model.encoder_option, contour_axes)
+
+    def enqueue(self, items: list[tuple[Axis, Op]]) -> None:
+        """Place ops in their axis queues, all or nothing; :class:`Blocked` if any queue is
+        short of space (the interpreter then waits, PC48 §6.10)."""
+        need: dict[int, int] = {}
+        for axis, op in items:
+            need[axis.index] = need.get(axis.index, 0) + op.slots
+        for index, slots in need.items():
+            if self.board.axes[index].queue.free < slots:
+                raise Blocked
+        for axis, op in items:
+            axis.queue.append(op)
+
+    # -- loops ----------------------------------------------------------------------------------
+
+    def in_loop(self, axes: list[Axis]) -> bool:
+        return any(self.loops[a.index] for a in axes)
+
+    def open_loop(self, kind: str, axes: list[Axis]) -> None:
+        for a in axes:
+            stack = self.loops[a.index]
+            if len(stack) >= MAX_LOOP_DEPTH:
+                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
+            if kind == "WH" and any(m.kind == "WH" for m in stack):
+                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
+
+    def push_loop(self, kind: str, axes: list[Axis]) -> None:
+        tag = self.context_tag()
+        for a in axes:
+            self.loops[a.index].append(LoopMark(kind, tag))
+
+    def close_loop(self, kind: str, axes: list[Axis]) -> None:
+        """LE/WD/WG must match the most recent LS/WS/WH entered in the same axis mode:
+        "otherwise the matching loop termination command will not be found"; CMD_S flags "LS
+        and LE commands are not in [matched] pairs"."""
+        tag = self.context_tag()
+        for a in axes:
+            stack = self.loops[a.index]
+            if not stack or stack[-1].kind != kind or stack[-1].context != tag:
+                raise CommandFailed(ErrorKind.LOOP_MISMATCH)
+
+    def pop_loop(self, axes: list[Axis]) -> None:
+        for a in axes:
+            self.loops[a.index].pop()
+
+    def forget_loops(self, index: int) -> None:
+        """The axis queue was flushed: its loops are gone with it."""
+        self.loops[index].clear()
+        self.while_flags.discard(index)
+
+    def take_while_flag(self, index: int) -> bool:
+        if index in self.while_flags:
+            self.while_flags.discard(index)
+            return True
+        return False

@@ -1,0 +1,448 @@
+"""Motion profiles, evaluated analytically.
+
+A :class:`Trajectory` is a start time, a start position and a sequence of *pieces*; each piece
+knows its displacement, velocity and acceleration as closed-form functions of the time since the
+piece began. The board never integrates: asking where an axis is at any instant is a function
+call, and so is asking when it will reach a switch (:meth:`Trajectory.first_time`).
+
+The profile shapes are those of PC48 §1.3 ("VELOCITY PROFILES"):
+
+* linear: constant acceleration ``A_m``; triangular when the move is too short to reach speed;
+  an optional base velocity (VB) is jumped to at the start and from at the end;
+* parabolic (PN#): ``a = A_0 - A_0 t / T_2``; the PN parameter is "10 times the ratio t/T_2";
+  a move too short to reach speed truncates the curve, keeping its shape;
+* cosine (CN): ``v = V_p/2 (1 - cos(2 A_m t / V_p))``; a short move keeps the full shape with a
+  lower peak velocity, "360 degrees of a sine wave" of acceleration.
+"""
+
+from __future__ import annotations
+
+import bisect
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+from typing import Protocol
+
+_BISECT_ITERATIONS = 80
+
+
+class Piece(Protocol):
+    """One analytic segment of a trajectory; ``tau`` runs from 0 to ``duration``."""
+
+    @property
+    def duration(self) -> float: ...
+
+    def x(self, tau: float) -> float: ...
+
+    def v(self, tau: float) -> float: ...
+
+    def a(self, tau: float) -> float: ...
+
+    def turning_points(self) -> list[float]:
+        """Times strictly inside the piece where the velocity changes sign."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class Poly:
+    """Constant jerk: ``x = v0 t + a0 t^2/2 + j t^3/6`` (linear and parabolic ramps, cruise)."""
+
+    v0: float
+    a0: float
+    j: float
+    duration: float
+
+    def x(self, tau: float) -> float:
+        return tau * (self.v0 + tau * (self.a0 / 2.0 + tau * self.j / 6.0))
+
+    def v(self, tau: float) -> float:
+        return self.v0 + tau * (self.a0 + tau * self.j / 2.0)
+
+    def a(self, tau: float) -> float:
+        return self.a0 + self.j * tau
+
+    def turning_points(self) -> list[float]:
+        a, b, c = self.j / 2.0, self.a0, self.v0
+        roots: list[float] = []
+        if a == 0.0:
+            if b != 0.0:
+                roots.append(-c / b)
+        else:
+            disc = b * b - 4 * a * c
+            if disc >= 0.0:
+                s = math.sqrt(disc)
+                roots.extend(((-b - s) / (2 * a), (-b + s) / (2 * a)))
+        return sorted(r for r in roots if 0.0 < r < self.duration)
+
+
+@dataclass(frozen=True, slots=True)
+class Cosine:
+    """Half-cosine velocity change: ``v = v0 + dv (1 - cos(w t)) / 2`` over ``0 <= w t <= pi``."""
+
+    v0: float
+    dv: float
+    omega: float
+    duration: float
+
+    def x(self, tau: float) -> float:
+        return self.v0 * tau + self.dv / 2.0 * (tau - math.sin(self.omega * tau) / self.omega)
+
+    def v(self, tau: float) -> float:
+        return self.v0 + self.dv * (1.0 - math.cos(self.omega * tau)) / 2.0
+
+    def a(self, tau: float) -> float:
+        return self.dv * self.omega * math.sin(self.omega * tau) / 2.0
+
+    def turning_points(self) -> list[float]:
+        if self.dv == 0.0:
+            return []
+        c = 1.0 + 2.0 * self.v0 / self.dv
+        if -1.0 <= c <= 1.0:
+            tau = math.acos(c) / self.omega
+            if 0.0 < tau < self.duration:
+                return [tau]
+        return []
+
+
+@dataclass(frozen=True, slots=True)
+class Decay:
+    """Exponential approach ``x = e0 (1 - exp(-k t))``: the position-hold correction (HG gain)."""
+
+    e0: float
+    k: float
+    duration: float
+
+    def x(self, tau: float) -> float:
+        return self.e0 * -math.expm1(-self.k * tau)
+
+    def v(self, tau: float) -> float:
+        return self.e0 * self.k * math.exp(-self.k * tau)
+
+    def a(self, tau: float) -> float:
+        return -self.e0 * self.k * self.k * math.exp(-self.k * tau)
+
+    def turning_points(self) -> list[float]:
+        return []
+
+
+@dataclass(frozen=True, slots=True)
+class Sinusoid:
+    """One coordinate of uniform circular motion: ``x = r (cos(p0 + w t) - cos p0)``."""
+
+    r: float
+    phase0: float
+    omega: float
+    duration: float
+
+    def x(self, tau: float) -> float:
+        return self.r * (math.cos(self.phase0 + self.omega * tau) - math.cos(self.phase0))
+
+    def v(self, tau: float) -> float:
+        return -self.r * self.omega * math.sin(self.phase0 + self.omega * tau)
+
+    def a(self, tau: float) -> float:
+        return -self.r * self.omega * self.omega * math.cos(self.phase0 + self.omega * tau)
+
+    def turning_points(self) -> list[float]:
+        if self.omega == 0.0 or self.r == 0.0:
+            return []
+        # sin(p0 + w t) == 0  <=>  p0 + w t == k pi
+        lo, hi = sorted((self.phase0, self.phase0 + self.omega * self.duration))
+        k = math.floor(lo / math.pi) + 1
+        out = []
+        while k * math.pi < hi:
+            out.append((k * math.pi - self.phase0) / self.omega)
+            k += 1
+        return sorted(t for t in out if 0.0 < t < self.duration)
+
+
+def scaled(piece: Piece, k: float) -> Piece:
+    """The same piece with every displacement multiplied by ``k`` (direction, axis share)."""
+    if isinstance(piece, Poly):
+        return Poly(piece.v0 * k, piece.a0 * k, piece.j * k, piece.duration)
+    if isinstance(piece, Cosine):
+        return Cosine(piece.v0 * k, piece.dv * k, piece.omega, piece.duration)
+    if isinstance(piece, Decay):
+        return Decay(piece.e0 * k, piece.k, piece.duration)
+    if isinstance(piece, Sinusoid):
+        return Sinusoid(piece.r * k, piece.phase0, piece.omega, piece.duration)
+    raise TypeError(piece)
+
+
+def mirrored(piece: Poly) -> Poly:
+    """The deceleration that retraces an acceleration piece backwards in time."""
+    d = piece.duration
+    return Poly(piece.v(d), -piece.a(d), piece.j, d)
+
+
+def cruise(velocity: float, duration: float = math.inf) -> Poly:
+    return Poly(velocity, 0.0, 0.0, duration)
+
+
+class Trajectory:
+    """Position of one axis as a function of time: ``x0`` at ``t0``, then the pieces in turn.
+
+    After the last (finite) piece the axis rests at ``final``; it defaults to the sum of the
+    displacements but is normally given exactly (an integer step count), so that float noise in
+    the pieces never shows in the position counter.
+    """
+
+    __slots__ = ("_offsets", "_starts", "duration", "end_time", "final", "pieces", "t0", "x0")
+
+    def __init__(
+        self, t0: float, x0: float, pieces: Sequence[Piece] = (), final: float | None = None
+    ) -> None:
+        self.t0 = t0
+        self.x0 = x0
+        self.pieces = tuple(p for p in pieces if p.duration > 0.0)
+        starts: list[float] = []
+        offsets: list[float] = []
+        t = 0.0
+        x = x0
+        for p in self.pieces:
+            starts.append(t)
+            offsets.append(x)
+            t += p.duration
+            if math.isfinite(p.duration):
+                x += p.x(p.duration)
+        self._starts = starts
+        self._offsets = offsets
+        self.duration = t
+        self.end_time = t0 + t
+        if final is None:
+            final = x if math.isfinite(t) else math.nan
+        self.final = final
+
+    @classmethod
+    def at_rest(cls, t0: float, x: float) -> Trajectory:
+        return cls(t0, x, (), final=x)
+
+    @property
+    def is_finite(self) -> bool:
+        return math.isfinite(self.duration)
+
+    def _locate(self, t: float) -> tuple[int, float]:
+        """Index of the piece running at ``t`` and the time into it; (-1, 0) before or after."""
+        rel = t - self.t0
+        if rel <= 0.0 or not self.pieces or rel >= self.duration:
+            return -1, 0.0
+        i = bisect.bisect_right(self._starts, rel) - 1
+        return i, rel - self._starts[i]
+
+    def position(self, t: float) -> float:
+        if t <= self.t0:
+            return self.x0
+        if t >= self.end_time:
+            return self.final
+        i, tau = self._locate(t)
+        return self._offsets[i] + self.pieces[i].x(tau)
+
+    def velocity(self, t: float) -> float:
+        i, tau = self._locate(t)
+        return 0.0 if i < 0 else self.pieces[i].v(tau)
+
+    def acceleration(self, t: float) -> float:
+        i, tau = self._locate(t)
+        return 0.0 if i < 0 else self.pieces[i].a(tau)
+
+    def moving_at(self, t: float) -> bool:
+        return self.t0 <= t < self.end_time and bool(self.pieces)
+
+    def first_time(self, level: float, above: bool, t_from: float) -> float | None:
+        """Earliest time ``>= t_from`` at which the position reaches ``level`` from the side
+        opposite to ``above`` (``above=True``: first time ``x >= level``).
+
+        The answer is the analytic instant; callers quantize it onto the sample grid.
+        """
+
+        def hit(x: float) -> bool:
+            return x >= level if above else x <= level
+
+        t_from = max(t_from, self.t0)
+        if hit(self.position(t_from)):
+            return t_from
+        rel_from = t_from - self.t0
+        for i, piece in enumerate(self.pieces):
+            start = self._starts[i]
+            end = start + piece.duration
+            if end <= rel_from:
+                continue
+            base = self._offsets[i]
+            lo = max(0.0, rel_from - start)
+            if math.isinf(piece.duration):
+                v = piece.v(lo)
+                x_lo = base + piece.x(lo)
+                if v == 0.0 or (v > 0) != above:
+                    return None
+                return self.t0 + start + lo + (level - x_lo) / v
+            bounds = [lo, *[tp for tp in piece.turning_points() if tp > lo], piece.duration]
+            for a, b in itertools.pairwise(bounds):
+                if not hit(base + piece.x(b)):
+                    continue
+                for _ in range(_BISECT_ITERATIONS):
+                    mid = (a + b) / 2.0
+                    if hit(base + piece.x(mid)):
+                        b = mid
+                    else:
+                        a = mid
+                    if b - a < 1e-13:
+                        break
+                return self.t0 + start + b
+        if self.pieces and self.is_finite and hit(self.final):
+            return self.end_time
+        return None
+
+
+class RampKind(Enum):
+    LINEAR = "linear"
+    PARABOLIC = "parabolic"
+    COSINE = "cosine"
+
+
+@dataclass(frozen=True, slots=True)
+class RampShape:
+    """The board-wide ramp selection: PF (linear), PN# (parabolic, # steps) or CN (cosine)."""
+
+    kind: RampKind = RampKind.LINEAR
+    steps: int = 3
+
+    @property
+    def ratio(self) -> float:
+        """t/T_2 at the end of a parabolic ramp: PC48 §1.3, "10 times the ratio t/T_2"."""
+        return self.steps / 10.0
+
+
+LINEAR = RampShape()
+
+
+def _linear_ramp(vmax: float, accel: float, vbase: float) -> tuple[Poly, float]:
+    vb = min(vbase, vmax) if vbase > 0.0 else 0.0
+    ramp = Poly(vb, accel, 0.0, (vmax - vb) / accel)
+    return ramp, ramp.x(ramp.duration)
+
+
+def _parabolic_ramp(vmax: float, accel: float, ratio: float) -> Poly:
+    t1 = vmax / (accel * (1.0 - ratio / 2.0))
+    return Poly(0.0, accel, -accel * ratio / t1, t1)
+
+
+def ramp_up(vmax: float, accel: float, vbase: float, shape: RampShape) -> Piece:
+    """The acceleration from rest to ``vmax`` (always positive)."""
+    if shape.kind is RampKind.COSINE:
+        omega = 2.0 * accel / vmax
+        return Cosine(0.0, vmax, omega, math.pi / omega)
+    if shape.kind is RampKind.PARABOLIC:
+        return _parabolic_ramp(vmax, accel, shape.ratio)
+    return _linear_ramp(vmax, accel, vbase)[0]
+
+
+def _ramp_down(up: Piece) -> Piece:
+    if isinstance(up, Cosine):
+        return Cosine(up.v0 + up.dv, -up.dv, up.omega, up.duration)
+    assert isinstance(up, Poly)
+    return mirrored(up)
+
+
+def move_pieces(
+    distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
+) -> list[Piece]:
+    """Rest-to-rest move over ``distance`` (signed) with peak ``vmax`` and acceleration ``accel``.
+
+    PC48 §1.2: "If the move parameters do not allow the motor to accelerate to the desired
+    velocity in the desired distance, the PC48 will automatically generate an optimum triangular
+    velocity profile."
+    """
+    d = abs(distance)
+    if d == 0.0 or vmax <= 0.0 or accel <= 0.0:
+        return []
+    sign = 1.0 if distance > 0 else -1.0
+    up: Piece
+    if shape.kind is RampKind.LINEAR:
+        up, s_up = _linear_ramp(vmax, accel, vbase)
+        if 2.0 * s_up > d:
+            vb = up.v0
+            vp = math.sqrt(vb * vb + accel * d)
+            up = Poly(vb, accel, 0.0, (vp - vb) / accel)
+            s_up = d / 2.0
+    elif shape.kind is RampKind.PARABOLIC:
+        up = _parabolic_ramp(vmax, accel, shape.ratio)
+        s_up = up.x(up.duration)
+        if 2.0 * s_up > d:
+            # "the curve is truncated, causing the shape of the velocity curve to remain the same"
+            lo, hi = 0.0, up.duration
+            for _ in range(_BISECT_ITERATIONS):
+                mid = (lo + hi) / 2.0
+                if up.x(mid) < d / 2.0:
+                    lo = mid
+                else:
+                    hi = mid
+            up = Poly(up.v0, up.a0, up.j, hi)
+            s_up = d / 2.0
+    else:
+        s_up = math.pi * vmax * vmax / (4.0 * accel)
+        peak = vmax
+        if 2.0 * s_up > d:
+            # "360 degrees of a sine wave" at the programmed peak acceleration
+            peak = math.sqrt(2.0 * accel * d / math.pi)
+            s_up = d / 2.0
+        omega = 2.0 * accel / peak
+        up = Cosine(0.0, peak, omega, math.pi / omega)
+    down = _ramp_down(up)
+    peak_v = up.v(up.duration)
+    pieces: list[Piece] = [up]
+    rest = d - 2.0 * s_up
+    if rest > 1e-9 and peak_v > 0.0:
+        pieces.append(cruise(peak_v, rest / peak_v))
+    pieces.append(down)
+    return [scaled(p, sign) for p in pieces]
+
+
+def move_time(distance: float, vmax: float, accel: float, vbase: float, shape: RampShape) -> float:
+    return sum(p.duration for p in move_pieces(distance, vmax, accel, vbase, shape))
+
+
+def velocity_change(v0: float, v1: float, accel: float) -> list[Piece]:
+    """Linear ramp from ``v0`` to ``v1`` at ``accel`` (split where it passes through zero)."""
+    if accel <= 0.0 or v0 == v1:
+        return []
+    if v0 * v1 < 0.0:
+        return velocity_change(v0, 0.0, accel) + velocity_change(0.0, v1, accel)
+    a = accel if v1 > v0 else -accel
+    return [Poly(v0, a, 0.0, (v1 - v0) / a)]
+
+
+def stop_distance(v: float, accel: float) -> float:
+    return v * v / (2.0 * accel) if accel > 0.0 else 0.0
+
+
+def stop_at(distance: float, v0: float, accel: float) -> list[Piece]:
+    """Pieces that bring velocity ``v0`` to rest ``distance`` ahead (SP, FP), or as soon as
+    possible at ``accel`` when that is too close or behind ("the axis will overshoot")."""
+    brake = stop_distance(v0, accel)
+    if v0 == 0.0:
+        return []
+    ahead = distance * math.copysign(1.0, v0)
+    pieces: list[Piece] = []
+    if ahead > brake:
+        pieces.append(cruise(v0, (ahead - brake) / abs(v0)))
+    return pieces + velocity_change(v0, 0.0, accel)
+
+
+def hold_correction(error: float, gain: float, vmax: float, deadband: float) -> list[Piece]:
+    """Position-hold correction (HN): velocity ``gain * error`` capped at ``vmax`` (HV/HG),
+    stopping once the remaining error is within ``deadband`` (HD)."""
+    e = abs(error)
+    stop = max(deadband, 0.5)
+    if e <= stop or gain <= 0.0 or vmax <= 0.0:
+        return []
+    sign = math.copysign(1.0, error)
+    pieces: list[Piece] = []
+    knee = vmax / gain  # error below which the gain, not HV, limits the velocity
+    if e > knee:
+        pieces.append(cruise(vmax, (e - knee) / vmax))
+        e = knee
+    if e > stop:
+        pieces.append(Decay(e, gain, math.log(e / stop) / gain))
+    return [scaled(p, sign) for p in pieces]

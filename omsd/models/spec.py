@@ -1,0 +1,138 @@
+"""How a board personality is described: one :class:`Model` row per product, sharing a command
+table per family.
+
+Every command table in the manuals has the same shape ("QUEUE REQUIREMENTS"): for each mode
+(single axis AX…AS, synchronized AA/AM, contour definition AA/CD) the command is *Immediate*,
+*Not valid*, *Flush + n*, or takes a number of queue slots that may depend on the ramp type
+(LINEAR / PARABOLIC / COSINE columns) and on the encoder option (NO ENCODER / ENCODER columns).
+:class:`Cell` holds one such entry; a :class:`CommandSpec` holds the three cells of a command.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+
+from omsd.board.profiles import RampKind
+
+
+class Kind(Enum):
+    NOT_VALID = "not valid"
+    IMMEDIATE = "immediate"
+    QUEUED = "queued"
+    FLUSH = "flush"  # "Flush + n": flush the queue(s), then queue n slots
+
+
+@dataclass(frozen=True)
+class Cell:
+    kind: Kind
+    # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER; ramp in RampKind order
+    slots: tuple[tuple[int, int, int], tuple[int, int, int]] = ((0, 0, 0), (0, 0, 0))
+    per_axis: int = 0  # extra slots per contour axis ("4 + number of axes")
+
+    def cost(self, ramp: RampKind, encoder: bool, axes: int = 0) -> int:
+        col = (RampKind.LINEAR, RampKind.PARABOLIC, RampKind.COSINE).index(ramp)
+        return self.slots[1 if encoder else 0][col] + self.per_axis * axes
+
+    def __add__(self, other: Cell) -> Cell:
+        rows = tuple(
+            tuple(a + b for a, b in zip(r1, r2, strict=True))
+            for r1, r2 in zip(self.slots, other.slots, strict=True)
+        )
+        return Cell(self.kind, rows, self.per_axis + other.per_axis)  # type: ignore[arg-type]
+
+
+NV = Cell(Kind.NOT_VALID)
+IMM = Cell(Kind.IMMEDIATE)
+
+
+def q(n: int) -> Cell:
+    """A fixed number of slots."""
+    return Cell(Kind.QUEUED, ((n, n, n), (n, n, n)))
+
+
+def qr(linear: int, parabolic: int, cosine: int) -> Cell:
+    """Slots by ramp type (LINEAR / PARABOLIC / COSINE columns)."""
+    row = (linear, parabolic, cosine)
+    return Cell(Kind.QUEUED, (row, row))
+
+
+def qe(no_encoder: int, encoder: int) -> Cell:
+    """Slots by encoder option (NO ENCODER / ENCODER columns)."""
+    return Cell(Kind.QUEUED, ((no_encoder,) * 3, (encoder,) * 3))
+
+
+def flush(n: int) -> Cell:
+    return Cell(Kind.FLUSH, ((n, n, n), (n, n, n)))
+
+
+def per_axis(base: int, each: int) -> Cell:
+    return Cell(Kind.QUEUED, ((base,) * 3, (base,) * 3), each)
+
+
+@dataclass(frozen=True)
+class CommandSpec:
+    """One command of a family's command set, with its queue table."""
+
+    mnemonic: str
+    operand: bool  # takes a (possibly optional) numeric operand
+    single: Cell  # AX - AS
+    multi: Cell  # AA, AM
+    contour: Cell = NV  # AA/CD
+    am: Cell | None = None  # where AM differs from AA (WS)
+    encoder_only: bool = False  # "AX - AT ... NO ENCODER Not valid"
+    not_on_encoder_models: bool = False  # MO
+    single_axes: str | None = None  # VS: "You must be in the AX mode"
+
+    def cell(self, mode: str) -> Cell:
+        if mode == "single":
+            return self.single
+        if mode == "AM" and self.am is not None:
+            return self.am
+        if mode == "CD":
+            return self.contour
+        return self.multi
+
+
+@dataclass(frozen=True)
+class Model:
+    """A board personality: everything the engine needs to behave as one product."""
+
+    name: str  # e.g. "PC48-4E"
+    family: str  # e.g. "PC48"
+    description: str
+    axes: str  # axis letters fitted, in register order, e.g. "XYZT"
+    encoder_axes: str  # axes with encoder feedback ("" without the encoder option)
+    sample_rate: int  # velocity calculations per second
+    input_buffer: int  # characters
+    queue_size: int  # slots per axis queue
+    contour_queue: int  # slots in the contour queue, 0 without contouring
+    commands: Mapping[str, CommandSpec]
+    firmware: str
+    wy_format: str  # str.format with model, family, firmware, axes (count)
+    max_velocity: float
+    max_acceleration: float  # exclusive upper bound
+    default_velocity: float
+    default_acceleration: float
+    default_contour_velocity: float
+    load_position_limit: int  # LP range
+    position_limit: int  # travel range of absolute targets
+    io_bits: int  # general-purpose I/O lines
+    factory_outputs: int  # RB at the factory jumper setting (1 = output)
+    done_bits: tuple[int, ...]  # done-flag register bit per axis, in ``axes`` order
+    velocity_stream_rate: int = 1024  # VS time unit: "1/1024 second sample intervals"
+    init_time: float = 0.1  # seconds the INIT bit stays high after RS
+    aliases: tuple[str, ...] = field(default=())
+
+    @property
+    def encoder_option(self) -> bool:
+        return bool(self.encoder_axes)
+
+    def has_encoder(self, axis: str) -> bool:
+        return axis in self.encoder_axes
+
+    def who_are_you(self) -> str:
+        return self.wy_format.format(
+            model=self.name, family=self.family, firmware=self.firmware, axes=len(self.axes)
+        )

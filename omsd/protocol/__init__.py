@@ -1,0 +1,1 @@
+"""The OMS command language: a streaming lexer and operand values (pure)."""

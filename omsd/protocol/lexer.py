@@ -1,0 +1,229 @@
+"""Streaming lexer for the OMS two-letter command language (PC48 §6.1).
+
+The board reads a continuous character stream and never waits for a line end. Real clients send
+``EFICAA SAAA RP`` and ``AX  LP600AX QA RP`` with no terminator at all (see
+``shared/interop/README.md``), so:
+
+* "All the commands are two ASCII characters and may be in upper or lower case." A command that
+  takes no operand is complete the moment its second letter arrives.
+* "The operand must be terminated by a space, carriage return or semi-colon to indicate the end
+  of the number." A line feed, the next letter or any other character ends it as well.
+* Multi-axis operands are comma separated; "An axis may be skipped by entering a comma with no
+  parameter. The command may be prematurely terminated with a ';'."
+* The manual's own examples put spaces between a mnemonic and its operand (``AY JG 12345``) and
+  after commas (``MR, -1000``, ``MR1000, 2000``); those spaces are skipped. A space after a
+  number ends the operand as the manual says.
+
+Bad input never raises. A character that cannot start a command, or a letter pair that is not a
+command, produces one :class:`Garbage` token at once (a client waiting for the ``#`` of a bad
+query must get it without sending more); the rest of the bad word (digits, punctuation, further
+unknown letter pairs) is swallowed silently until a separator or a known command. The lexer
+stores at most :data:`MAX_FIELD` characters per field and :data:`MAX_FIELDS` fields, so its
+memory is bounded whatever it is fed.
+
+Control-D and Control-Y never reach the lexer: they bypass the interpreter (PC48 §6.9, §6.12).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum, auto
+
+from omsd.board.events import ErrorKind
+
+MAX_FIELD = 24
+MAX_FIELDS = 16
+MAX_TEXT = 48
+
+SEPARATORS = frozenset(b" \t\r\n;")
+NUMBER_CHARS = frozenset(b"0123456789+-.")
+
+
+@dataclass(frozen=True, slots=True)
+class Command:
+    """A complete command: upper-case mnemonic and its comma-separated fields.
+
+    ``fields`` is ``None`` when no operand was given at all; a skipped field is ``None``.
+    ``error`` is set when the operand was lexically unusable (too long, too many fields).
+    """
+
+    mnemonic: str
+    fields: tuple[str | None, ...] | None
+    text: str
+    error: ErrorKind | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Garbage:
+    """Characters that are not a command."""
+
+    text: str
+    kind: ErrorKind
+
+
+Token = Command | Garbage
+
+
+class Syntax(Enum):
+    """What a mnemonic is to the lexer."""
+
+    UNKNOWN = auto()
+    BARE = auto()  # complete at its second letter
+    OPERAND = auto()  # may be followed by an operand
+
+
+class _State(Enum):
+    IDLE = auto()
+    LETTER = auto()  # one letter of a mnemonic seen
+    OPERAND = auto()
+    SWALLOW = auto()  # inside a bad word, after its error was reported
+    SWALLOW_LETTER = auto()
+
+
+def _is_letter(b: int) -> bool:
+    return 65 <= b <= 90 or 97 <= b <= 122
+
+
+class Lexer:
+    """Byte-at-a-time tokenizer. ``syntax(mnemonic)`` classifies upper-case mnemonics."""
+
+    def __init__(self, syntax: Callable[[str], Syntax]) -> None:
+        self._syntax = syntax
+        self.reset()
+
+    def reset(self) -> None:
+        self._state = _State.IDLE
+        self._first = 0
+        self._mnemonic = ""
+        self._text = bytearray()
+        self._fields: list[str | None] = []
+        self._field = bytearray()
+        self._started = False
+        self._skip_spaces = False
+        self._error: ErrorKind | None = None
+
+    @property
+    def idle(self) -> bool:
+        """True when no command is partly received."""
+        return self._state in (_State.IDLE, _State.SWALLOW)
+
+    def feed(self, b: int) -> list[Token]:
+        out: list[Token] = []
+        self._step(b, out)
+        return out
+
+    # -- states -------------------------------------------------------------------------------
+
+    def _step(self, b: int, out: list[Token]) -> None:
+        state = self._state
+        if state is _State.OPERAND:
+            self._operand(b, out)
+        elif state is _State.LETTER:
+            self._letter(b, out)
+        elif state is _State.SWALLOW_LETTER:
+            self._swallow_letter(b, out)
+        elif state is _State.SWALLOW:
+            if b in SEPARATORS:
+                self._state = _State.IDLE
+            elif _is_letter(b):
+                self._first = b
+                self._state = _State.SWALLOW_LETTER
+        else:
+            self._idle(b, out)
+
+    def _idle(self, b: int, out: list[Token]) -> None:
+        if b in SEPARATORS:
+            return
+        if _is_letter(b):
+            self._first = b
+            self._state = _State.LETTER
+            return
+        out.append(Garbage(_printable(bytes([b])), ErrorKind.BAD_CHARACTER))
+        self._state = _State.SWALLOW
+
+    def _letter(self, b: int, out: list[Token]) -> None:
+        pair = bytes([self._first, b])
+        if not _is_letter(b):
+            out.append(Garbage(_printable(pair), ErrorKind.UNKNOWN_COMMAND))
+            self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
+            return
+        mnemonic = pair.decode("ascii").upper()
+        syntax = self._syntax(mnemonic)
+        if syntax is Syntax.UNKNOWN:
+            out.append(Garbage(mnemonic, ErrorKind.UNKNOWN_COMMAND))
+            self._state = _State.SWALLOW
+        elif syntax is Syntax.BARE:
+            out.append(Command(mnemonic, None, mnemonic))
+            self._state = _State.IDLE
+        else:
+            self._begin_operand(mnemonic)
+
+    def _swallow_letter(self, b: int, out: list[Token]) -> None:
+        if _is_letter(b):
+            mnemonic = bytes([self._first, b]).decode("ascii").upper()
+            syntax = self._syntax(mnemonic)
+            if syntax is Syntax.BARE:
+                out.append(Command(mnemonic, None, mnemonic))
+                self._state = _State.IDLE
+            elif syntax is Syntax.OPERAND:
+                self._begin_operand(mnemonic)
+            else:
+                self._state = _State.SWALLOW
+        else:
+            self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
+
+    def _begin_operand(self, mnemonic: str) -> None:
+        self._mnemonic = mnemonic
+        self._text = bytearray(mnemonic.encode("ascii"))
+        self._fields = []
+        self._field = bytearray()
+        self._started = False
+        self._skip_spaces = True
+        self._error = None
+        self._state = _State.OPERAND
+
+    def _operand(self, b: int, out: list[Token]) -> None:
+        if b in NUMBER_CHARS:
+            if len(self._field) < MAX_FIELD:
+                self._field.append(b)
+            else:
+                self._error = ErrorKind.OVERLONG
+            self._keep(b)
+            self._started = True
+            self._skip_spaces = False
+        elif b == 0x2C:  # ','
+            self._close_field()
+            self._keep(b)
+            self._started = True
+            self._skip_spaces = True
+        elif b in (0x20, 0x09) and self._skip_spaces:
+            self._keep(b)
+        else:
+            self._finish(out)
+            if b not in SEPARATORS:
+                self._step(b, out)
+
+    def _keep(self, b: int) -> None:
+        if len(self._text) < MAX_TEXT:
+            self._text.append(b)
+
+    def _close_field(self) -> None:
+        if len(self._fields) < MAX_FIELDS:
+            self._fields.append(self._field.decode("ascii") if self._field else None)
+        else:
+            self._error = self._error or ErrorKind.TOO_MANY_PARAMETERS
+        self._field = bytearray()
+
+    def _finish(self, out: list[Token]) -> None:
+        fields: tuple[str | None, ...] | None = None
+        if self._started:
+            self._close_field()
+            fields = tuple(self._fields)
+        text = self._text.decode("ascii").rstrip(" \t")
+        out.append(Command(self._mnemonic, fields, text, self._error))
+        self._state = _State.IDLE
+
+
+def _printable(raw: bytes) -> str:
+    return "".join(chr(c) if 32 <= c < 127 else f"<{c:02X}>" for c in raw)
