@@ -53,6 +53,7 @@ class Wait:
     round: int = 0
     bit: int = 0
     then: Callable[[float], None] | None = None  # run when the wait is over
+    jump: int | None = None  # program index to go on from (a loop pass), else the next op
 
 
 @dataclass

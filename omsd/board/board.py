@@ -384,17 +384,16 @@ class Board:
         self._sensors_changed(a, now)
 
     def set_encoder_input(self, axis: str, counts: int, now: float) -> None:
-        """Drive the encoder input from outside (a handwheel): in ET tracking mode the axis
-        follows it (PC48 §6.17); otherwise the encoder simply disagrees with the motor."""
+        """Drive the encoder input from outside, as a handwheel or another device would. In ET
+        tracking mode the axis follows it at once, with no ramps (PC48 §6.17: "The axis will
+        duplicate the encoder input"); otherwise the encoder simply disagrees with the motor."""
         self.advance(now)
         a = self._axis(axis)
+        delta = (counts - a.encoder(now)) / a.ratio
         if a.tracking:
-            motor = a.track_counter + (counts - a.track_enc) / a.ratio
-            a.load_counter(now, a.position(now))
-            a.begin(now, [], Motion.IDLE, final=float(round(motor)))
-            a.phys_offset = a.enc_phys + (counts - a.enc_base) / a.ratio - a.position(now)
+            a.begin(now, [], Motion.IDLE, final=float(round(a.position(now) + delta)))
         else:
-            a.phys_offset += (counts - a.encoder(now)) / a.ratio
+            a.phys_offset += delta
         self._sensors_changed(a, now)
 
     def _sensors_changed(self, axis: Axis, now: float) -> None:

@@ -53,6 +53,10 @@ class Executor:
                 axis.invalidate()
                 if w.then is not None:
                     w.then(t)
+                if w.jump is not None:
+                    q.jump(w.jump)
+                    progressed = True
+                    continue
                 op = q.current
                 if w.kind == "group" and op is not None:
                     nxt = self._after_group(axis, op, t)
@@ -125,7 +129,7 @@ class Executor:
             return None if self.board.input_high(op.args[0], t) else Wait("input", bit=op.args[0])
         if op.code in ("WD", "WG"):
             assert op.group is not None
-            return self._loop_end(axis, op.group.data["again"])
+            return self._loop_end(axis, op.group.data["again"], t)
         return None
 
     def drop_from_groups(self, axis: Axis, ops: list[Op], t: float) -> None:
@@ -593,15 +597,15 @@ class Executor:
     # -- loops and waits ----------------------------------------------------------------------
 
     def _op_LS(self, axis: Axis, op: Op, t: float) -> Result:
-        axis.queue.loops.append(LoopFrame("LS", axis.queue.pc, op.args[0]))
+        axis.queue.loops.append(LoopFrame("LS", axis.queue.pc, op.args[0], t))
         return None
 
     def _op_WS(self, axis: Axis, op: Op, t: float) -> Result:
-        axis.queue.loops.append(LoopFrame("WS", axis.queue.pc))
+        axis.queue.loops.append(LoopFrame("WS", axis.queue.pc, 0, t))
         return None
 
     def _op_WH(self, axis: Axis, op: Op, t: float) -> Result:
-        axis.queue.loops.append(LoopFrame("WH", axis.queue.pc))
+        axis.queue.loops.append(LoopFrame("WH", axis.queue.pc, 0, t))
         return None
 
     def _op_LE(self, axis: Axis, op: Op, t: float) -> Result:
@@ -609,20 +613,20 @@ class Executor:
         if frame is None:
             return None
         frame.remaining -= 1
-        return self._loop_end(axis, frame.remaining > 0)
+        return self._loop_end(axis, frame.remaining > 0, t)
 
     def _op_WD(self, axis: Axis, op: Op, t: float) -> Result:
         # "execute the commands between the WS and WD commands as a loop while the specified
         # general purpose input line is true, i.e. low ... The test is at the bottom"
         if op.group is not None:
             return self.arrive(axis, op, t)
-        return self._loop_end(axis, not self.board.input_high(op.args[0], t))
+        return self._loop_end(axis, not self.board.input_high(op.args[0], t), t)
 
     def _op_WG(self, axis: Axis, op: Op, t: float) -> Result:
         if op.group is not None:
             return self.arrive(axis, op, t)
         again = not self.board.interpreter.take_while_flag(axis.index)
-        return self._loop_end(axis, again)
+        return self._loop_end(axis, again, t)
 
     def loop_decision(self, group: SyncGroup, t: float) -> None:
         """One decision for all axes of an AA WS/WD or WH/WG loop, so they stay together."""
@@ -633,12 +637,20 @@ class Executor:
             flags = [self.board.interpreter.take_while_flag(i) for i in group.members]
             group.data["again"] = not any(flags)
 
-    def _loop_end(self, axis: Axis, again: bool) -> Result:
+    def _loop_end(self, axis: Axis, again: bool, t: float) -> Result:
         q = axis.queue
         if not q.loops:
             return None
+        frame = q.loops[-1]
         if again:
-            return q.loops[-1].start + 1
+            target = frame.start + 1
+            if t - frame.began < 1e-12:
+                # a pass that took no time: the next one waits for the next sample, as the
+                # board's command processor does at most a pass per sample of such a loop
+                frame.began = self.board.clock.after(t)
+                return Wait("time", until=frame.began, jump=target)
+            frame.began = t
+            return target
         q.loops.pop()
         return None
 

@@ -254,7 +254,7 @@ class Interpreter:
     # -- queueing -------------------------------------------------------------------------------
 
     def cost(self, cell: Cell, axis: Axis, contour_axes: int = 0) -> int:
-        return cell.cost(self.board.ramp.kind, self.board.model.encoder_option, contour_axes)
+        return cell.cost(self.board.ramp.kind.value, self.board.model.encoder_option, contour_axes)
 
     def enqueue(self, items: list[tuple[Axis, Op]]) -> None:
         """Place ops in their axis queues, all or nothing; :class:`Blocked` if any queue is

@@ -71,6 +71,7 @@ class LoopFrame:
     kind: str  # "LS", "WS" or "WH"
     start: int  # program index of the loop-start op
     remaining: int = 0
+    began: float = 0.0  # when the current pass began
 
 
 class CommandQueue:

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
-from omsd.board.profiles import RampKind
+RAMP_COLUMNS = ("linear", "parabolic", "cosine")  # the LINEAR / PARABOLIC / COSINE columns
 
 
 class Kind(Enum):
@@ -27,12 +27,13 @@ class Kind(Enum):
 @dataclass(frozen=True)
 class Cell:
     kind: Kind
-    # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER; ramp in RampKind order
+    # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER; ramp in RAMP_COLUMNS order
     slots: tuple[tuple[int, int, int], tuple[int, int, int]] = ((0, 0, 0), (0, 0, 0))
     per_axis: int = 0  # extra slots per contour axis ("4 + number of axes")
 
-    def cost(self, ramp: RampKind, encoder: bool, axes: int = 0) -> int:
-        col = (RampKind.LINEAR, RampKind.PARABOLIC, RampKind.COSINE).index(ramp)
+    def cost(self, ramp: str, encoder: bool, axes: int = 0) -> int:
+        """Slots for ramp column ``ramp`` ("linear", "parabolic", "cosine")."""
+        col = RAMP_COLUMNS.index(ramp)
         return self.slots[1 if encoder else 0][col] + self.per_axis * axes
 
     def __add__(self, other: Cell) -> Cell:

@@ -1,0 +1,5 @@
+import sys
+
+from omsd.cli import main
+
+sys.exit(main())
