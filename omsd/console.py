@@ -47,7 +47,11 @@ def run(model: Model, stdin: BinaryIO, stdout: BinaryIO, notes: TextIO) -> int:
             timeout = 0.01
         if eof and deadline is None and not backlog:
             break
-        ready = sel.select(timeout) if not eof else (time.sleep(timeout or 0.05) or [])
+        if eof:
+            time.sleep(timeout if timeout is not None else 0.05)
+            ready = False
+        else:
+            ready = bool(sel.select(timeout))
         now = clock()
         if ready:
             data = os.read(fd, 4096)
