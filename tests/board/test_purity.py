@@ -1,4 +1,4 @@
-"""The engine is pure: no I/O, no clock, no sleeping, no asyncio (issue 2, "Time as an argument")."""
+"""The engine is pure: no I/O, no clock, no sleeping, no asyncio ("Time as an argument")."""
 
 from __future__ import annotations
 
