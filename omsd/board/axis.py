@@ -262,9 +262,9 @@ class Axis:
         self.invalidate()
 
     def settle(self, t: float) -> None:
-        """Come to rest at the nearest whole step (end of motion)."""
+        """Come to rest on the whole step the counter shows (end of motion)."""
         x = self.traj.position(t)
-        self.traj = Trajectory.at_rest(t, float(math.floor(x + 0.5)))
+        self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
         self.invalidate()
 
@@ -385,11 +385,10 @@ class Axis:
 
 
 def _steps(x: float, origin: float) -> int:
-    """Whole steps emitted from ``origin`` toward ``x`` (pulses are counted, not rounded)."""
-    d = x - origin
+    """The position counter at ``x`` on the way from ``origin``: pulses are counted as whole
+    steps in the direction of travel, never rounded ahead."""
     eps = 1e-6
-    whole = math.floor(d + eps) if d >= 0 else math.ceil(d - eps)
-    return round(origin) + whole
+    return math.floor(x + eps) if x >= origin else math.ceil(x - eps)
 
 
 def _rebased(traj: Trajectory, t: float, shift: float) -> Trajectory:

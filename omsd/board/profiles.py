@@ -224,9 +224,10 @@ class Trajectory:
         return math.isfinite(self.duration)
 
     def _locate(self, t: float) -> tuple[int, float]:
-        """Index of the piece running at ``t`` and the time into it; (-1, 0) before or after."""
+        """Index of the piece running at ``t`` and the time into it; (-1, 0) before or after.
+        At ``t0`` itself the first piece is running: a trajectory may begin in motion."""
         rel = t - self.t0
-        if rel <= 0.0 or not self.pieces or rel >= self.duration:
+        if rel < 0.0 or not self.pieces or rel >= self.duration:
             return -1, 0.0
         i = bisect.bisect_right(self._starts, rel) - 1
         return i, rel - self._starts[i]

@@ -30,7 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum, auto
 
-from omsd.board.events import ErrorKind
+from omsd.protocol.errors import ErrorKind
 
 MAX_FIELD = 24
 MAX_FIELDS = 16

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from decimal import ROUND_DOWN, Decimal, InvalidOperation
 
-from omsd.board.events import ErrorKind
+from omsd.protocol.errors import ErrorKind
 
 _NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)\Z")
 
