@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from decimal import Decimal
 from enum import Enum, auto
 from typing import TYPE_CHECKING
@@ -248,21 +248,48 @@ class Axis:
     def begin(
         self, t: float, pieces: list[pf.Piece], motion: Motion, final: float | None = None
     ) -> None:
-        """Start new motion at ``t`` from wherever the axis is (position and velocity)."""
-        x = self.traj.position(t)
-        if not pieces:
-            self.traj = Trajectory.at_rest(t, x if final is None else final)
+        """Start new motion on tick ``t`` from wherever the axis is then (position and
+        velocity). Until ``t`` the axis goes on as it was: asking for the position between now
+        and the tick must not show the future."""
+        now = min(self.board.now, t)
+        prefix = _segment(self.traj, now, t) if t > now else []
+        moving_before = any(p.v(0.0) != 0.0 or p.a(0.0) != 0.0 for p in prefix)
+        x_now = self.traj.position(now)
+        if not pieces and not moving_before:
+            x = self.traj.position(t)
+            self.traj = Trajectory.at_rest(now, x if final is None else final)
             self.motion = Motion.IDLE
         else:
-            self.traj = Trajectory(t, x, pieces, final)
+            if not moving_before:
+                prefix = [pf.cruise(0.0, t - now)] if t > now else []
+            self.traj = Trajectory(now, x_now, [*prefix, *pieces], final)
             self.motion = motion
             if motion is not Motion.HOLD:
                 self.in_position = False
         self.sensor_check = t
         self.invalidate()
 
+    def _note_direction(self, t: float) -> None:
+        """Remember the direction the axis was last moving in (RA/QA character 4)."""
+        v = self.traj.velocity(t)
+        if v == 0.0 and self.traj.pieces:
+            v = self.traj.velocity(min(t, self.traj.end_time) - 1e-7)
+        if v:
+            self.direction = 1 if v > 0 else -1
+
+    def heading(self, t: float) -> int:
+        """RA/QA character 4: "Moving in positive direction" / "negative direction"; at rest,
+        the direction it last moved in (or was set to by MP/MM)."""
+        v = self.traj.velocity(t)
+        if v > 0:
+            return 1
+        if v < 0:
+            return -1
+        return self.direction
+
     def settle(self, t: float) -> None:
         """Come to rest on the whole step the counter shows (end of motion)."""
+        self._note_direction(t)
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
@@ -270,6 +297,7 @@ class Axis:
 
     def halt(self, t: float) -> None:
         """Stop pulses at once (KL, hard limit, KM/KR at home)."""
+        self._note_direction(t)
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
@@ -389,6 +417,31 @@ def _steps(x: float, origin: float) -> int:
     steps in the direction of travel, never rounded ahead."""
     eps = 1e-6
     return math.floor(x + eps) if x >= origin else math.ceil(x - eps)
+
+
+def _segment(traj: Trajectory, a: float, b: float) -> list[pf.Piece]:
+    """The motion of ``traj`` from ``a`` to ``b`` as pieces (rest included)."""
+    out: list[pf.Piece] = []
+    span = b - a
+    acc = 0.0
+    rel = a - traj.t0
+    start = 0.0
+    for piece in traj.pieces:
+        end = start + piece.duration
+        if end <= rel:
+            start = end
+            continue
+        cut = max(0.0, rel - start)
+        tail = _tail(piece, cut)
+        length = min(tail.duration, span - acc)
+        out.append(replace(tail, duration=length))  # type: ignore[type-var]
+        acc += length
+        start = end
+        if acc >= span:
+            return out
+    if acc < span:
+        out.append(pf.cruise(0.0, span - acc))
+    return out
 
 
 def _rebased(traj: Trajectory, t: float, shift: float) -> Trajectory:

@@ -40,7 +40,7 @@ def handles(*mnemonics: str) -> Callable[[Handler], Handler]:
 def _status(axis: Axis, t: float) -> str:
     """RA/QA field (PC48 §6.13 RA): direction P/M, done D/N, overtravel L/N (in the direction
     of char 4), home H/N."""
-    d = axis.direction
+    d = axis.heading(t)
     return "".join(
         (
             "P" if d > 0 else "M",

@@ -64,6 +64,8 @@ class Harness:
 
     def until(self, t: float) -> bytes:
         """Let time pass to ``t``, visiting every deadline on the way."""
+        if t < self.t:
+            raise ValueError(f"time runs forward: {t} is before {self.t}")
         board = self.board
         while True:
             d = board.next_deadline()

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 from omsd.board.contour import ContourDefinition
 from omsd.board.events import ErrorKind
-from omsd.models.spec import Cell, Kind
+from omsd.models.spec import Cell, CommandSpec, Kind
 from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
 from omsd.protocol.operands import OperandError, check_range, parse_number, truncate
 
@@ -31,6 +31,12 @@ if TYPE_CHECKING:
     from omsd.board.queue import Op
 
 MAX_LOOP_DEPTH = 4
+
+
+def _syntax(spec: CommandSpec) -> Syntax:
+    if not spec.operand:
+        return Syntax.BARE
+    return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
 
 
 class CommandFailed(Exception):
@@ -55,9 +61,7 @@ class Interpreter:
         self.buffer: deque[int] = deque()
         self.capacity = board.model.input_buffer
         commands = board.model.commands
-        self._syntax = {
-            m: (Syntax.OPERAND if spec.operand else Syntax.BARE) for m, spec in commands.items()
-        }
+        self._syntax = {m: _syntax(spec) for m, spec in commands.items()}
         self.lexer = Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN))
         self.pending: deque[Token] = deque()
         self.reset()
@@ -260,10 +264,15 @@ class Interpreter:
         """Place ops in their axis queues, all or nothing; :class:`Blocked` if any queue is
         short of space (the interpreter then waits, PC48 §6.10)."""
         need: dict[int, int] = {}
+        count: dict[int, int] = {}
         for axis, op in items:
             need[axis.index] = need.get(axis.index, 0) + op.slots
+            count[axis.index] = count.get(axis.index, 0) + 1
         for index, slots in need.items():
-            if self.board.axes[index].queue.free < slots:
+            q = self.board.axes[index].queue
+            # zero-slot ops (WA, SW, CD) still hold a place: a queue never holds more entries
+            # than it has slots, so a flood of them holds the host off like any other
+            if q.free < slots or len(q.program) + count[index] > q.capacity:
                 raise Blocked
         for axis, op in items:
             axis.queue.append(op)

@@ -39,6 +39,11 @@ def _c(
     return CommandSpec(mnemonic, operand, single, multi, contour, **kw)  # type: ignore[arg-type]
 
 
+def _o(mnemonic: str, single: object, multi: object, contour: object = NV) -> CommandSpec:
+    """A command whose operand may be left out: a space after it ends the command."""
+    return CommandSpec(mnemonic, True, single, multi, contour, optional=True)  # type: ignore[arg-type]
+
+
 _ENC = {"encoder_only": True}
 
 PC48_COMMANDS: dict[str, CommandSpec] = {
@@ -58,13 +63,13 @@ PC48_COMMANDS: dict[str, CommandSpec] = {
         _c("SL", False, q(1), NV),
         _c("SF", False, q(1), NV),
         _c("CN", False, q(1), NV),
-        _c("PN", True, IMM, IMM),
+        _o("PN", IMM, IMM),
         _c("PF", False, IMM, IMM),
         _c("RS", False, IMM, IMM),
         # 6.6 user I/O (and their contour forms, 6.21)
-        _c("AN", True, q(1), q(1), q(2)),
-        _c("AF", True, q(1), q(1), q(2)),
-        _c("PA", True, q(2), q(2)),
+        _o("AN", q(1), q(1), q(2)),
+        _o("AF", q(1), q(1), q(2)),
+        _o("PA", q(2), q(2)),
         _c("SE", True, q(3), q(3)),
         _c("BL", True, q(2), q(2), q(2)),
         _c("BH", True, q(2), q(2), q(2)),
@@ -74,8 +79,8 @@ PC48_COMMANDS: dict[str, CommandSpec] = {
         _c("AC", True, qr(4, 15, 15), qr(4, 15, 15)),
         _c("VL", True, qr(2, 13, 13), qr(2, 13, 13)),
         _c("VB", True, q(2), q(2)),
-        _c("LP", True, qe(2, 4), NV),
-        _c("MA", True, q(2), q(2)),
+        _o("LP", qe(2, 4), NV),
+        _o("MA", q(2), q(2)),
         _c("MR", True, q(2), q(2)),
         _c("ML", True, NV, qr(6, 30, 30)),
         _c("MT", True, NV, qr(6, 30, 30), per_axis(4, 1)),
@@ -101,8 +106,8 @@ PC48_COMMANDS: dict[str, CommandSpec] = {
         _c("WG", False, q(2), q(2)),
         _c("CW", False, q(1), q(1)),
         # 6.11 home and initialization
-        _c("HM", True, qe(4, 6), NV),
-        _c("HR", True, qe(4, 6), NV),
+        _o("HM", qe(4, 6), NV),
+        _o("HR", qe(4, 6), NV),
         _c("KM", False, q(2), NV),
         _c("KR", False, q(2), NV),
         # 6.12 move synchronization

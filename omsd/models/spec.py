@@ -77,10 +77,11 @@ class CommandSpec:
     """One command of a family's command set, with its queue table."""
 
     mnemonic: str
-    operand: bool  # takes a (possibly optional) numeric operand
+    operand: bool  # takes a numeric operand
     single: Cell  # AX - AS
     multi: Cell  # AA, AM
     contour: Cell = NV  # AA/CD
+    optional: bool = False  # the operand may be left out (MA, HM, LP, PA, PN, AN, AF)
     am: Cell | None = None  # where AM differs from AA (WS)
     encoder_only: bool = False  # "AX - AT ... NO ENCODER Not valid"
     not_on_encoder_models: bool = False  # MO

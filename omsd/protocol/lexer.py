@@ -10,9 +10,12 @@ The board reads a continuous character stream and never waits for a line end. Re
   of the number." A line feed, the next letter or any other character ends it as well.
 * Multi-axis operands are comma separated; "An axis may be skipped by entering a comma with no
   parameter. The command may be prematurely terminated with a ';'."
-* The manual's own examples put spaces between a mnemonic and its operand (``AY JG 12345``) and
-  after commas (``MR, -1000``, ``MR1000, 2000``); those spaces are skipped. A space after a
-  number ends the operand as the manual says.
+* The manual's own examples put spaces between a mnemonic and its operand (``AY JG 12345``,
+  ``MT 10,000,-1000;``) and after commas (``MR, -1000``, ``MR1000, 2000``). Spaces after a comma,
+  and after a mnemonic whose operand is *required*, are skipped. After a mnemonic whose operand
+  is optional (``HM``, ``MA``, ``AN`` …) a space ends the command, as §6.1 says ("The operand must
+  immediately follow the command"): ``AX HM `` homes at once rather than waiting for a number.
+  A space after a number ends the operand.
 
 Bad input never raises. A character that cannot start a command, or a letter pair that is not a
 command, produces one :class:`Garbage` token at once (a client waiting for the ``#`` of a bad
@@ -70,7 +73,8 @@ class Syntax(Enum):
 
     UNKNOWN = auto()
     BARE = auto()  # complete at its second letter
-    OPERAND = auto()  # may be followed by an operand
+    OPTIONAL = auto()  # may be followed by an operand; a space ends it
+    REQUIRED = auto()  # expects an operand; spaces before it are skipped
 
 
 class _State(Enum):
@@ -157,7 +161,7 @@ class Lexer:
             out.append(Command(mnemonic, None, mnemonic))
             self._state = _State.IDLE
         else:
-            self._begin_operand(mnemonic)
+            self._begin_operand(mnemonic, syntax)
 
     def _swallow_letter(self, b: int, out: list[Token]) -> None:
         if _is_letter(b):
@@ -166,20 +170,20 @@ class Lexer:
             if syntax is Syntax.BARE:
                 out.append(Command(mnemonic, None, mnemonic))
                 self._state = _State.IDLE
-            elif syntax is Syntax.OPERAND:
-                self._begin_operand(mnemonic)
+            elif syntax is not Syntax.UNKNOWN:
+                self._begin_operand(mnemonic, syntax)
             else:
                 self._state = _State.SWALLOW
         else:
             self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
 
-    def _begin_operand(self, mnemonic: str) -> None:
+    def _begin_operand(self, mnemonic: str, syntax: Syntax) -> None:
         self._mnemonic = mnemonic
         self._text = bytearray(mnemonic.encode("ascii"))
         self._fields = []
         self._field = bytearray()
         self._started = False
-        self._skip_spaces = True
+        self._skip_spaces = syntax is Syntax.REQUIRED
         self._error = None
         self._state = _State.OPERAND
 
