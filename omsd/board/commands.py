@@ -745,9 +745,7 @@ def _uf(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _er(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "These counts must be integers unless user units are enabled."
     axis = ix.axis
-    enc, motor = ix.fields(cmd, 2)
-    if enc is None or motor is None:
-        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+    enc, motor = ix.required(cmd, 2)
     if axis.uu is None and (enc != enc.to_integral_value() or motor != motor.to_integral_value()):
         raise CommandFailed(ErrorKind.BAD_NUMBER)
     if enc <= 0 or motor <= 0:
@@ -818,9 +816,7 @@ def _direction(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("MV")
 def _mv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
-    pos, vel = ix.fields(cmd, 2)
-    if pos is None or vel is None:
-        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+    pos, vel = ix.required(cmd, 2)
     p = _check_target(ix, ix.convert(axis, pos, "dist"))
     v = ix.convert(axis, vel, "vel")
     if not 0 < abs(v) <= ix.board.model.max_velocity:
@@ -898,9 +894,7 @@ def _cr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     assert defn is not None
     if len(defn.axes) != 2:
         raise CommandFailed(ErrorKind.CIRCULAR_AXES)
-    xc, yc, angle = ix.fields(cmd, 3)
-    if xc is None or yc is None or angle is None:
-        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+    xc, yc, angle = ix.required(cmd, 3)
     ax, ay = (ix.board.axes[i] for i in defn.axes)
     center = (ix.convert(ax, xc, "dist"), ix.convert(ay, yc, "dist"))
     if not defn.add(Arc(center, float(angle)), ix.cost(cell, ix.axis)):

@@ -221,12 +221,20 @@ class Interpreter:
         return parse_number(fields[0])
 
     def fields(self, cmd: Command, count: int) -> list[Decimal | None]:
-        """Positional operands (ER#,#  CR#,#,#  VS#,#,#); missing ones are ``None``."""
+        """Positional operands (VS#,#,#); missing ones are ``None``."""
         fields = list(cmd.fields or ())
         if len(fields) > count:
             raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
         fields += [None] * (count - len(fields))
         return [None if f is None else parse_number(f) for f in fields]
+
+    def required(self, cmd: Command, count: int) -> list[Decimal]:
+        """Positional operands that must all be given (ER#,#  MV#,#  CR#,#,#)."""
+        values = self.fields(cmd, count)
+        present = [v for v in values if v is not None]
+        if len(present) < count:
+            raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+        return present
 
     def per_axis(self, cmd: Command, axes: list[int] | None = None) -> dict[int, Decimal]:
         """AA-syntax operands: ``MRx#,y#,z#,...;`` with skipped fields. Fields beyond the
