@@ -40,7 +40,6 @@ class Motion(Enum):
     STREAM = auto()
     CONTOUR = auto()
     HOLD = auto()  # position-hold correction
-    TRACK = auto()
 
 
 @dataclass
@@ -158,7 +157,8 @@ class Axis:
             return self.stall_phys
         return self.traj.position(t) + self.phys_offset
 
-    def moving(self, t: float) -> bool:
+    @property
+    def moving(self) -> bool:
         return self.motion is not Motion.IDLE
 
     def load_counter(self, t: float, value: float) -> None:

@@ -22,7 +22,6 @@ a ten-minute move in microseconds::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -320,11 +319,6 @@ class Board:
             self.outputs_low |= 1 << bit
         else:
             self.outputs_low &= ~(1 << bit)
-        self.io_changed(t)
-
-    def io_changed(self, t: float) -> None:
-        """An input level may have changed: waits on inputs are looked at again by the next
-        settle()."""
 
     # -- the simulated world (tests, control API) -----------------------------------------------
 
@@ -457,10 +451,3 @@ def _axis_worlds(
         return [world.get(letter, AxisWorld()) for letter in model.axes]
     worlds = list(world)
     return worlds + [AxisWorld() for _ in range(len(model.axes) - len(worlds))]
-
-
-def fmt_number(value: float) -> str:
-    """Integers as the board prints them: no sign for positives, no separators."""
-    if math.isnan(value):
-        return "0"
-    return str(int(value))

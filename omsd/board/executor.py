@@ -280,7 +280,6 @@ class Executor:
         if axis.motion is not Motion.MOVE:
             axis.aux = not axis.pa  # "setting the master's X axis auxiliary line low until..."
         axis.aux_timer = None
-        self.board.io_changed(t)
         return None
 
     def _op_SE(self, axis: Axis, op: Op, t: float) -> Result:
@@ -300,7 +299,6 @@ class Executor:
         axis.pa = None  # "can be turned off by using the AN or AF command"
         axis.aux_timer = None
         axis.invalidate()
-        self.board.io_changed(t)
 
     def _op_BL(self, axis: Axis, op: Op, t: float) -> Result:
         self.board.set_output(op.args[0], low=True, t=t)
@@ -438,7 +436,6 @@ class Executor:
             if axis.pa is not None:
                 axis.aux = axis.pa
                 axis.aux_timer = None
-                self.board.io_changed(tick)
             self._arm_in(axis, target)
 
     def _interpolate(self, axes: list[Axis], targets: dict[int, float], t: float) -> None:
@@ -685,13 +682,12 @@ class Executor:
             axis.in_position = True
             if axis.slip_detect:
                 axis.anchor_tracking(t)
-        elif motion is not Motion.TRACK:
+        else:
             if axis.pa is not None and axis.aux == axis.pa:
                 if axis.se_ms:
                     axis.aux_timer = t + axis.se_ms / 1000.0
                 else:
                     axis.aux = not axis.pa
-                    self.board.io_changed(t)
             axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
             axis.in_position = True
             self.check_hold(axis, t)
@@ -784,7 +780,6 @@ class Executor:
         axis.aux_timer = None
         if axis.pa is not None and axis.motion is Motion.IDLE:
             axis.aux = not axis.pa
-            self.board.io_changed(t)
         axis.invalidate()
 
     def on_outputs(self, axis: Axis, t: float) -> None:
@@ -799,4 +794,4 @@ class Executor:
 
 def _motion_wait(axis: Axis) -> Wait | None:
     """Wait for the motion just started, if it did start."""
-    return Wait("motion") if axis.moving(0.0) else None
+    return Wait("motion") if axis.moving else None

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from omsd.board.axis import Axis
 from omsd.board.board import Board
 from omsd.board.events import CommandErrorEvent, Event, Output, Reply
 from omsd.board.world import AxisWorld
@@ -95,7 +96,7 @@ class Harness:
         assert a is not None
         return a.counter(self.t)
 
-    def axis(self, letter: str = "X"):  # type: ignore[no-untyped-def]
+    def axis(self, letter: str = "X") -> Axis:
         a = self.board.axis_by_letter(letter)
         assert a is not None
         return a
