@@ -17,7 +17,7 @@ a ten-minute move in microseconds::
     while (t := board.next_deadline()) is not None and t < 10:
         board.advance(t)
     board.receive(b"RP", now=10.0)
-    board.take_output()  # [Reply(time=10.0, data=b'\\n\\r1000000\\n\\r')]
+    board.take_bytes()  # b'\\n\\r1000000\\n\\r'
 """
 
 from __future__ import annotations
@@ -252,19 +252,23 @@ class Board:
         self._output.append(event)
 
     def reply(self, data: bytes, t: float) -> None:
+        """Echoed characters: unframed, merged with echo just before them."""
         out = self._output
-        if out and isinstance(out[-1], Reply) and out[-1].time == t:
-            out[-1] = Reply(t, out[-1].data + data)
+        last = out[-1] if out else None
+        if isinstance(last, Reply) and last.text is None and last.time == t:
+            out[-1] = Reply(t, last.data + data)
         else:
             out.append(Reply(t, data))
 
     def reply_value(self, text: str, t: float) -> None:
         """ "surrounded by line feeds and carriage returns": ``<LF><CR>text<LF><CR>``."""
-        self.reply(b"\n\r" + text.encode("ascii") + b"\n\r", t)
+        payload = text.encode("ascii")
+        self._output.append(Reply(t, b"\n\r" + payload + b"\n\r", payload))
 
     def reply_status(self, text: str, t: float) -> None:
         """RA, QA, RI, QI, EA: "one line feed and two carriage returns on each end"."""
-        self.reply(b"\n\r\r" + text.encode("ascii") + b"\n\r\r", t)
+        payload = text.encode("ascii")
+        self._output.append(Reply(t, b"\n\r\r" + payload + b"\n\r\r", payload))
 
     def command_error(self, kind: ErrorKind, command: str, t: float) -> None:
         """CMD_S (PC48 Table 3-8) and, with echo on, "an English readable error message"."""

@@ -17,10 +17,17 @@ from omsd.protocol.errors import ErrorKind
 
 @dataclass(frozen=True, slots=True)
 class Reply:
-    """Bytes the board writes to its data port (replies, echo, error text)."""
+    """Bytes the board writes to its data port.
+
+    ``text`` is the payload of a framed reply (``data`` without its ``<LF><CR>`` or
+    ``<LF><CR><CR>`` framing), or ``None`` for echoed characters, which are not framed. A link
+    discipline that replaces the board's framing (the DOS driver's end-of-string character)
+    uses it; the raw link sends ``data`` as it is.
+    """
 
     time: float
     data: bytes
+    text: bytes | None = None
 
 
 @dataclass(frozen=True, slots=True)
