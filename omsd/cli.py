@@ -1,26 +1,65 @@
-"""The ``omsd`` command line."""
+"""The ``omsd`` command line.
+
+``omsd`` alone serves the built-in default (one PC48-4E on TCP 127.0.0.1:7048 and on a pty);
+``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file; ``--config FILE``
+describes several. ``omsd models`` lists the personalities; ``omsd console`` talks to one
+board on this terminal without serving it.
+
+Exit status: 0 after a clean stop, 2 for a configuration error, 1 when the daemon cannot start
+(a port in use, a pty link that cannot be made). Errors are one line on standard error.
+"""
 
 from __future__ import annotations
 
 import argparse
+import asyncio
 import sys
 
 from omsd import __version__
+from omsd.config import VIEWS, ConfigError, from_options, load_config
+from omsd.link import KINDS
 from omsd.models import MODELS, UnknownModel, get_model
 
 DEFAULT_MODEL = "PC48-4E"
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"omsd: {message}\n")
+
+
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="omsd",
-        description="Virtual Oregon Micro Systems motion controllers.",
+        description="Virtual Oregon Micro Systems motion controllers, served over pty and TCP.",
     )
     p.add_argument("--version", action="version", version=f"omsd {__version__}")
-    sub = p.add_subparsers(dest="command")
-    console = sub.add_parser("console", help="talk to one emulated board on this terminal")
-    console.add_argument("--board", default=DEFAULT_MODEL, help="model, e.g. PC48-8E")
+    p.add_argument("--config", metavar="FILE", help="TOML file describing the boards")
+    p.add_argument(
+        "--board", metavar="MODEL", help=f"model of the one board (default {DEFAULT_MODEL})"
+    )
+    p.add_argument(
+        "--tcp",
+        metavar="[HOST:]PORT",
+        action="append",
+        default=[],
+        help="serve on TCP (repeatable; PORT 0 picks a free port)",
+    )
+    p.add_argument(
+        "--pty",
+        metavar="PATH",
+        action="append",
+        default=[],
+        help="serve on a pty with a symlink at PATH (repeatable)",
+    )
+    p.add_argument("--link", choices=KINDS, help="driver (DOS driver conventions, default) or raw")
+    p.add_argument("--eos", metavar="HEX", help="driver end-of-string character, like E:XX (0A)")
+    p.add_argument("--log", metavar="FILE", help="append the traffic to FILE as JSON lines")
+    p.add_argument("--view", choices=VIEWS, help="traffic on standard error (default auto)")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
     sub.add_parser("models", help="list the board personalities")
+    console = sub.add_parser("console", help="talk to one board on this terminal")
+    console.add_argument("--board", dest="console_board", default=DEFAULT_MODEL, metavar="MODEL")
     return p
 
 
@@ -30,15 +69,50 @@ def main(argv: list[str] | None = None) -> int:
         for model in MODELS.values():
             print(f"{model.name:<10} {model.description}")
         return 0
-    name = getattr(args, "board", DEFAULT_MODEL)
+    if args.command == "console":
+        try:
+            model = get_model(args.console_board)
+        except UnknownModel as exc:
+            print(f"omsd: --board: {exc}", file=sys.stderr)
+            return 2
+        from omsd.console import main as console_main
+
+        return console_main(model)
+    return _serve(args)
+
+
+def _serve(args: argparse.Namespace) -> int:
+    from omsd.daemon import Daemon, StartupError
+    from omsd.telemetry.traffic import TrafficLog
+
     try:
-        model = get_model(name)
-    except UnknownModel as exc:
+        if args.config:
+            single = [o for o in ("board", "tcp", "pty", "link", "eos") if getattr(args, o)]
+            if single:
+                raise ConfigError(f"--{single[0]}", None, "cannot be combined with --config")
+            config = load_config(args.config)
+        else:
+            config = from_options(args.board, args.tcp, args.pty, args.link, args.eos, None)
+    except ConfigError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
-    from omsd.console import main as console_main
-
-    return console_main(model)
+    log_file = args.log if args.log else config.log.file
+    view = args.view or config.log.view
+    try:
+        log = TrafficLog(view=view, file=log_file)
+    except OSError as exc:
+        print(f"omsd: {exc}", file=sys.stderr)
+        return 1
+    try:
+        asyncio.run(Daemon(config, log).run())
+    except StartupError as exc:
+        print(f"omsd: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        log.close()
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover
