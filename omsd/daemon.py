@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import signal
 import sys
 from dataclasses import dataclass
@@ -62,9 +63,9 @@ class Daemon:
                             service, tcp.host, tcp.port, board.second_client
                         )
                     except OSError as exc:
+                        reason = os.strerror(exc.errno) if exc.errno else str(exc)
                         raise StartupError(
-                            f"{board.name}: cannot listen on tcp {tcp.host}:{tcp.port}: "
-                            f"{exc.strerror or exc}"
+                            f"{board.name}: cannot listen on tcp {tcp}: {reason.lower()}"
                         ) from None
                     self.servers.append(server)
                     self._announce(
@@ -75,9 +76,12 @@ class Daemon:
                     try:
                         device = endpoint.open()
                     except (OSError, KeyError) as exc:
-                        reason = exc.strerror if isinstance(exc, OSError) else f"no group {exc}"
+                        if isinstance(exc, OSError):
+                            reason = exc.strerror or str(exc)
+                        else:
+                            reason = f"no group {exc}"
                         raise StartupError(
-                            f"{board.name}: cannot create pty {pty.link}: {reason or exc}"
+                            f"{board.name}: cannot create pty {pty.link}: {reason}"
                         ) from None
                     self.ptys.append(endpoint)
                     self._announce(
@@ -86,7 +90,7 @@ class Daemon:
                         )
                     )
         except BaseException:
-            await self.stop()
+            await self.stop(quiet=True)
             raise
         return self.endpoints
 
@@ -99,22 +103,26 @@ class Daemon:
     async def run(self) -> None:
         """Serve until SIGTERM/SIGINT (or :meth:`request_stop`)."""
         loop = asyncio.get_running_loop()
-        await self.start()
+        # handlers first: a signal that comes as soon as the endpoints are announced must still
+        # stop the daemon cleanly
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, self.request_stop)
-        sdnotify.ready(f"serving {len(self.endpoints)} endpoint(s)")
         try:
-            await self._stop.wait()
+            await self.start()  # on failure it has already cleaned up, quietly
+            sdnotify.ready(f"serving {len(self.endpoints)} endpoint(s)")
+            try:
+                await self._stop.wait()
+            finally:
+                sdnotify.stopping()
+                await self.stop()
         finally:
             for sig in (signal.SIGTERM, signal.SIGINT):
                 loop.remove_signal_handler(sig)
-            sdnotify.stopping()
-            await self.stop()
 
     def request_stop(self) -> None:
         self._stop.set()
 
-    async def stop(self) -> None:
+    async def stop(self, quiet: bool = False) -> None:
         for server in self.servers:
             server.close()
         for service in self.services:
@@ -132,7 +140,8 @@ class Daemon:
         self.servers.clear()
         self.ptys.clear()
         self.services.clear()
-        self.log.info("stopped")
+        if not quiet:
+            self.log.info("stopped")
 
     def _loop_error(self, loop: asyncio.AbstractEventLoop, context: dict[str, Any]) -> None:
         exc = context.get("exception")

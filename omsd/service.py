@@ -160,10 +160,11 @@ class BoardService:
                 client.send(out.data)
         if self._orphan:
             self._feed_orphan()
-        if self._waiting:
+        if self._waiting and self.link.room() > 0:
+            # never call back into a client from here: a client may be inside feed()
             waiting, self._waiting = self._waiting, []
             for client in waiting:
-                client.input_room()
+                self.loop.call_soon(client.input_room)
         self._reschedule()
 
     def _reschedule(self) -> None:

@@ -136,6 +136,10 @@ class Board:
         self.advance(now)
         return taken
 
+    def input_room(self) -> int:
+        """Characters the input buffer can take now (what a host sees as TBE_S)."""
+        return self.interpreter.capacity - len(self.interpreter.buffer)
+
     def take_output(self) -> list[Output]:
         out, self._output = self._output, []
         return out

@@ -96,13 +96,17 @@ class DriverLink:
     def pending(self) -> int:
         return len(self._pending)
 
+    def room(self) -> int:
+        return self.buffer_size - len(self._pending)
+
     def _pass_on(self, now: float) -> None:
         """Feed the buffer to the board, up to a wait character or a full board buffer."""
         while True:
             progressed = self._step(now)
+            held = self._waiting
             self._collect(now)
-            if not progressed:
-                return
+            if not progressed and not (held is not None and self._waiting is None):
+                return  # nothing passed on, and no wait was released by the board's output
 
     def _step(self, now: float) -> bool:
         """One piece of the buffer: a comment, a wait character or a run of characters for the

@@ -38,3 +38,6 @@ class RawLink:
 
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
+
+    def room(self) -> int:
+        return self.board.input_room()

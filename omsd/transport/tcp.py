@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
+import os
 from typing import cast
 
 from omsd.service import BoardService
@@ -52,7 +53,7 @@ class TcpClient(asyncio.Protocol):
             return
         for other in others:
             service.log.warning(f"{service.name}: {self.label} takes over from {other.label}")
-            other.close()
+            other.hand_over()
         service.log.info(f"{service.name}: {self.label} connected")
         service.attach(self)
 
@@ -109,6 +110,30 @@ class TcpClient(asyncio.Protocol):
             return
         self._dropping = False
         transport.write(data)
+
+    def hand_over(self) -> None:
+        """Close this connection for a newcomer, keeping what it wrote: bytes already in the
+        socket that asyncio has not read yet (the old client may have written and hung up in
+        the same instant the new one connected) go to the board first."""
+        transport = self.transport
+        if transport is None:
+            return
+        sock = transport.get_extra_info("socket")
+        if sock is not None:
+            fd = sock.fileno()
+            while fd >= 0:
+                try:
+                    data = os.read(fd, 65536)
+                except OSError:  # BlockingIOError: nothing more now; others: the socket is gone
+                    break
+                if not data:
+                    break
+                self._pending += data
+        self.service.detach(self)
+        if self._pending:
+            self.service.orphan_input(bytes(self._pending))
+            self._pending = bytearray()
+        self.close()
 
     def close(self) -> None:
         if self.transport is not None:

@@ -282,3 +282,13 @@ def test_each_done_releases_one_wait_only() -> None:
     assert h.take() == b"!\x01\n"
     h.run(2.0)
     assert h.take() == b"!\x02\n500\n"
+
+
+def test_bytes_held_by_a_wait_go_on_when_the_board_releases_it_by_itself() -> None:
+    """The DONE arrives while nobody writes: the held bytes must still be passed on."""
+    h = driver()
+    h.write(b"AX VL10000 MR500 GO ID ! RP RP")
+    assert h.link.pending == 6
+    h.run(1.0)
+    assert h.take() == b"!\x01\n500\n500\n"
+    assert h.link.pending == 0

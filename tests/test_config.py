@@ -1,0 +1,699 @@
+"""The configuration layer: TOML files and the single-board command line into frozen dataclasses,
+and every error as one line that names the file (or option) and the key."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+from omsd.board.world import AxisWorld, SwitchType
+from omsd.config import (
+    DEFAULT_TCP_PORT,
+    BoardConfig,
+    ConfigError,
+    LogConfig,
+    PtyEndpoint,
+    TcpEndpoint,
+    default_config,
+    default_pty_link,
+    from_options,
+    load_config,
+)
+
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "config"
+
+MINIMAL = '[[board]]\ntcp = "7001"\n'
+
+
+@pytest.fixture(autouse=True)
+def _runtime_dir(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Path:
+    """Default pty links under a known directory, whatever the environment running the tests."""
+    monkeypatch.delenv("RUNTIME_DIRECTORY", raising=False)
+    runtime = tmp_path / "run"
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    return runtime
+
+
+def write(tmp_path: Path, text: str, name: str = "omsd.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def load_error(tmp_path: Path, text: str) -> str:
+    path = write(tmp_path, text)
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    message = str(info.value)
+    assert "\n" not in message and "\r" not in message
+    assert message.startswith(f"{path}: "), message
+    return message
+
+
+def option_error(**options: object) -> str:
+    args: dict[str, object] = {
+        "board": None,
+        "tcp": [],
+        "pty": [],
+        "link": None,
+        "eos": None,
+        "log": None,
+    }
+    args.update(options)
+    with pytest.raises(ConfigError) as info:
+        from_options(**args)  # type: ignore[arg-type]
+    message = str(info.value)
+    assert "\n" not in message
+    return message
+
+
+def board(**options: object) -> BoardConfig:
+    args: dict[str, object] = {
+        "board": None,
+        "tcp": [],
+        "pty": [],
+        "link": None,
+        "eos": None,
+        "log": None,
+    }
+    args.update(options)
+    config = from_options(**args)  # type: ignore[arg-type]
+    assert config.source == "command line"
+    (only,) = config.boards
+    return only
+
+
+# -- defaults -----------------------------------------------------------------------------------
+
+
+def test_default_config_is_one_pc48_4e_on_tcp_7048_and_a_pty(_runtime_dir: Path) -> None:
+    config = default_config()
+    assert config.source == "built-in default"
+    assert config.log == LogConfig(file=None, view="auto")
+    (b,) = config.boards
+    assert b.name == "board1"
+    assert b.model == "PC48-4E"
+    assert (b.link, b.eos, b.buffer_size, b.second_client) == ("driver", 0x0A, 256, "takeover")
+    assert b.tcp == (TcpEndpoint("127.0.0.1", 7048),)
+    assert b.pty == (PtyEndpoint(_runtime_dir / "omsd" / "board1", None, 0o660),)
+    assert dict(b.world) == {} and dict(b.inputs) == {}
+    assert DEFAULT_TCP_PORT == 7048
+
+
+def test_default_pty_link_in_xdg_runtime_dir(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("XDG_RUNTIME_DIR", "/run/user/1234")
+    assert default_pty_link("xy") == Path("/run/user/1234/omsd/xy")
+
+
+def test_default_pty_link_without_runtime_dir_is_per_user_in_tmp(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.delenv("XDG_RUNTIME_DIR")
+    assert default_pty_link("xy") == Path(f"/tmp/omsd-{os.getuid()}/xy")
+    monkeypatch.setenv("XDG_RUNTIME_DIR", "relative/dir")  # not a usable runtime dir
+    assert default_pty_link("xy") == Path(f"/tmp/omsd-{os.getuid()}/xy")
+
+
+def test_default_pty_link_under_a_systemd_runtime_directory(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("RUNTIME_DIRECTORY", "/run/omsd:/run/other")
+    assert default_pty_link("xy") == Path("/run/omsd/xy")
+
+
+def test_configuration_is_frozen() -> None:
+    config = default_config()
+    b = config.boards[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        b.name = "other"  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        b.world["X"] = AxisWorld()  # type: ignore[index]
+    given = {"X": AxisWorld()}
+    made = BoardConfig(name="b", world=given)
+    given["Y"] = AxisWorld()
+    assert list(made.world) == ["X"]  # a copy, not a view of the caller's dict
+
+
+# -- the example files --------------------------------------------------------------------------
+
+EXAMPLES = sorted(CONFIG_DIR.glob("*.toml"))
+
+
+def test_the_three_example_files_exist() -> None:
+    assert {p.name for p in EXAMPLES} >= {"omsd.toml", "epics-pc48.toml", "ci.toml"}
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
+def test_example_file_loads(path: Path) -> None:
+    config = load_config(path)
+    assert config.source == str(path)
+    assert config.boards
+
+
+def test_example_lab_setup_shows_every_key() -> None:
+    text = (CONFIG_DIR / "omsd.toml").read_text()
+    keys = [
+        *("file", "view", "name", "model", "link", "eos", "buffer", "tcp", "pty"),
+        *("group", "mode", "second_client", "inputs"),
+        *(f.name for f in dataclasses.fields(AxisWorld)),
+    ]
+    code = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
+    for key in keys:
+        assert re.search(rf"\b{key} = ", code), key
+    config = load_config(CONFIG_DIR / "omsd.toml")
+    xy, slits = config.boards
+    assert xy.world["X"].home_switch is SwitchType.NORMALLY_CLOSED
+    assert xy.pty[0].group == "dialout" and xy.pty[0].mode == 0o660
+    assert slits.model == "PC48-8" and slits.eos == 0x0D and slits.buffer_size == 0x800
+
+
+def test_example_epics_board_is_a_pc48_4_on_the_raw_link() -> None:
+    (b,) = load_config(CONFIG_DIR / "epics-pc48.toml").boards
+    assert (b.model, b.link, b.pty) == ("PC48-4", "raw", ())
+    assert b.tcp == (TcpEndpoint("127.0.0.1", 7048),)
+
+
+def test_example_ci_boards_are_tcp_only_on_every_interface() -> None:
+    config = load_config(CONFIG_DIR / "ci.toml")
+    for b in config.boards:
+        assert b.pty == ()
+        assert [t.host for t in b.tcp] == ["0.0.0.0"]
+        for world in b.world.values():
+            assert world.positive_limit - world.negative_limit <= 20_000
+
+
+# -- a full file --------------------------------------------------------------------------------
+
+FULL = """
+[log]
+file = "logs/traffic.jsonl"
+view = "Plain"
+
+[[board]]
+name = "xy-stage"
+model = "pc48-4e"
+link = "driver"
+eos = "0x0d"
+buffer = "0800"
+tcp = ["127.0.0.1:7001", 7002, "[::1]:7001", "localhost:7003", "0.0.0.0:0", "[::]:0"]
+pty = ["ttyOMS0", true, { link = "/run/omsd/xy", group = "dialout", mode = "0640" }]
+second_client = "refuse"
+inputs = { 0 = false, 13 = true }
+
+[board.axes.X]
+start_position = 12.5
+negative_limit = -50000
+positive_limit = 50000
+home_low = 0
+home_high = 100
+home_switch = "normally_closed"
+encoder_counts_per_rev = 2000
+encoder_index = 1999
+
+[board.axes.t]
+positive_limit = 3e4
+
+[[board]]
+model = "PC48-2"
+link = "raw"
+tcp = 8001
+pty = { link = "~/oms2", mode = 0o600 }
+"""
+
+
+def test_full_file(tmp_path: Path, _runtime_dir: Path) -> None:
+    path = write(tmp_path, FULL)
+    config = load_config(path)
+    assert config.source == str(path)
+    assert config.log == LogConfig(tmp_path / "logs" / "traffic.jsonl", "plain")
+    xy, second = config.boards
+    assert xy.name == "xy-stage" and xy.model == "PC48-4E"
+    assert (xy.link, xy.eos, xy.buffer_size, xy.second_client) == ("driver", 13, 2048, "refuse")
+    assert xy.tcp == (
+        TcpEndpoint("127.0.0.1", 7001),
+        TcpEndpoint("127.0.0.1", 7002),
+        TcpEndpoint("::1", 7001),
+        TcpEndpoint("localhost", 7003),
+        TcpEndpoint("0.0.0.0", 0),
+        TcpEndpoint("::", 0),
+    )
+    assert [str(t) for t in xy.tcp[2:4]] == ["[::1]:7001", "localhost:7003"]
+    assert xy.pty == (
+        PtyEndpoint(tmp_path / "ttyOMS0"),  # relative to the file's directory
+        PtyEndpoint(_runtime_dir / "omsd" / "xy-stage"),  # true: the default link
+        PtyEndpoint(Path("/run/omsd/xy"), "dialout", 0o640),
+    )
+    assert dict(xy.inputs) == {0: False, 13: True}
+    assert set(xy.world) == {"X", "T"}
+    x = xy.world["X"]
+    assert x == AxisWorld(
+        start_position=12.5,
+        negative_limit=-50000,
+        positive_limit=50000,
+        home_low=0,
+        home_high=100,
+        home_switch=SwitchType.NORMALLY_CLOSED,
+        encoder_counts_per_rev=2000,
+        encoder_index=1999,
+    )
+    assert isinstance(x.negative_limit, float)
+    assert xy.world["T"] == AxisWorld(positive_limit=30000.0)  # the rest keep their defaults
+    assert second.name == "board2" and second.model == "PC48-2" and second.link == "raw"
+    assert second.tcp == (TcpEndpoint("127.0.0.1", 8001),)
+    assert second.pty == (PtyEndpoint(Path.home() / "oms2", None, 0o600),)
+    assert (second.eos, second.buffer_size) == (0x0A, 256)
+
+
+def test_a_default_link_given_twice_is_a_duplicate(tmp_path: Path) -> None:
+    """``true`` and a table without ``link`` both mean the default link."""
+    message = load_error(tmp_path, FULL.replace('0640" }]', '0640" }, {}]'))
+    assert "board[0].pty[3]: expected a link no other endpoint uses" in message
+    assert "(also board[0].pty[1])" in message
+
+
+def test_eos_and_buffer_as_integers(tmp_path: Path) -> None:
+    text = "[[board]]\ntcp = 7001\neos = 0x0D\nbuffer = 16\n[[board]]\ntcp = 7002\neos = 0\n"
+    a, b = load_config(write(tmp_path, text)).boards
+    assert (a.eos, a.buffer_size, b.eos) == (13, 16, 0)
+
+
+def test_empty_endpoint_list_is_allowed_beside_the_other_kind(tmp_path: Path) -> None:
+    (b,) = load_config(write(tmp_path, '[[board]]\ntcp = []\npty = "p"\n')).boards
+    assert b.tcp == () and b.pty == (PtyEndpoint(tmp_path / "p"),)
+
+
+# -- file errors --------------------------------------------------------------------------------
+
+FILE_ERRORS = [
+    # unknown keys anywhere, with the allowed ones
+    ("colour = 1\n" + MINIMAL, "colour: unknown key; expected one of log, board"),
+    (
+        MINIMAL + "modle = 'PC48-4'\n",
+        "board[0].modle: unknown key (did you mean 'model'?); expected one of name, model,",
+    ),
+    (MINIMAL + "[board.axes.X]\nhome = 5\n", "board[0].axes.X.home: unknown key"),
+    ("[log]\nlevel = 'debug'\n" + MINIMAL, "log.level: unknown key; expected one of file, view"),
+    (
+        '[[board]]\npty = { lnk = "p" }\n',
+        "board[0].pty.lnk: unknown key (did you mean 'link'?); expected one of link, group, mode",
+    ),
+    # the document's shape
+    ("", "board: expected at least one [[board]] table, got none"),
+    ("board = []\n", "board: expected at least one [[board]] table, got none"),
+    ('[board]\ntcp = "7001"\n', "board: expected an array of tables, [[board]], got {"),
+    ("board = [1]\n", "board[0]: expected a table, got 1"),
+    ("log = 'x'\n" + MINIMAL, "log: expected a table, got 'x'"),
+    ("[[board]]\nname = 'a'\n", "board[0]: expected at least one endpoint (tcp or pty), got none"),
+    ("[[board]]\ntcp = []\npty = []\n", "board[0]: expected at least one endpoint"),
+    # names
+    (MINIMAL + "name = 'x y'\n", "board[0].name: expected a name of letters, digits"),
+    (MINIMAL + "name = '..'\n", "board[0].name: expected a name of letters, digits"),
+    (MINIMAL + "name = 3\n", "board[0].name: expected a name of letters, digits, '_', '.' and"),
+    (
+        MINIMAL + "name = 'a'\n" + '[[board]]\nname = "a"\ntcp = 7002\n',
+        "board[1].name: expected a name no other board has, got 'a' (also board[0].name)",
+    ),
+    (
+        '[[board]]\nname = "board2"\ntcp = 7001\n[[board]]\ntcp = 7002\n',
+        "board[1].name: expected a name no other board has, got 'board2'",
+    ),
+    # model
+    (
+        MINIMAL + "model = 'PC99'\n",
+        "board[0].model: expected a board model (PC48-2, PC48-4, PC48-6, PC48-8, PC48-2E, "
+        "PC48-4E, PC48-6E), got 'PC99'",
+    ),
+    (MINIMAL + "model = 4\n", "board[0].model: expected a board model"),
+    # link and driver settings
+    (MINIMAL + "link = 'serial'\n", "board[0].link: expected 'driver' or 'raw', got 'serial'"),
+    (MINIMAL + "eos = 'GG'\n", "board[0].eos: expected a character code 00..FF in hex"),
+    (MINIMAL + "eos = '100'\n", "board[0].eos: expected a character code 00..FF"),
+    (MINIMAL + "eos = 256\n", "board[0].eos: expected a character code 00..FF in hex like the"),
+    (MINIMAL + "eos = -1\n", "board[0].eos: expected"),
+    (MINIMAL + "eos = true\n", "board[0].eos: expected a character code 00..FF in hex"),
+    (MINIMAL + "buffer = 15\n", "board[0].buffer: expected a buffer size 16..32767"),
+    (MINIMAL + "buffer = 32768\n", "board[0].buffer: expected a buffer size 16..32767"),
+    (MINIMAL + "buffer = '8000'\n", "board[0].buffer: expected a buffer size 16..32767"),
+    (MINIMAL + "buffer = 256.0\n", "board[0].buffer: expected a buffer size 16..32767"),
+    (
+        MINIMAL + "link = 'raw'\neos = '0D'\n",
+        "board[0].eos: is a driver link setting; a raw link keeps the board's own LF/CR framing",
+    ),
+    (MINIMAL + "link = 'raw'\nbuffer = 512\n", "board[0].buffer: is a driver link setting"),
+    (
+        MINIMAL + "second_client = 'queue'\n",
+        "board[0].second_client: expected 'takeover' or 'refuse', got 'queue'",
+    ),
+    # TCP
+    ("[[board]]\ntcp = true\n", "board[0].tcp: expected [HOST:]PORT with PORT 0..65535, got True"),
+    ("[[board]]\ntcp = 65536\n", "board[0].tcp: expected [HOST:]PORT with PORT 0..65535"),
+    ("[[board]]\ntcp = [7001, 'x']\n", "board[0].tcp[1]: expected [HOST:]PORT with PORT"),
+    (
+        "[[board]]\ntcp = ['7001', '7001']\n",
+        "board[0].tcp[1]: expected an address no other endpoint uses, got '127.0.0.1:7001' "
+        "(also board[0].tcp[0])",
+    ),
+    (
+        "[[board]]\ntcp = '0.0.0.0:7001'\n[[board]]\ntcp = '127.0.0.1:7001'\n",
+        "board[1].tcp: expected an address no other endpoint uses, got '127.0.0.1:7001' "
+        "(also board[0].tcp)",
+    ),
+    (
+        "[[board]]\ntcp = '[::1]:7001'\n[[board]]\ntcp = '[::]:7001'\n",
+        "board[1].tcp: expected an address no other endpoint uses, got '[::]:7001'",
+    ),
+    # pty
+    ("[[board]]\npty = ''\n", "board[0].pty: expected a path, got ''"),
+    ("[[board]]\npty = false\n", "board[0].pty: expected a path, true (the default link) or a"),
+    ("[[board]]\npty = [3]\n", "board[0].pty[0]: expected a path, true"),
+    ("[[board]]\npty = { mode = '0666x' }\n", "board[0].pty.mode: expected permissions 0o000.."),
+    ("[[board]]\npty = { mode = 660 }\n", "board[0].pty.mode: expected permissions"),
+    ("[[board]]\npty = { mode = '1777' }\n", "board[0].pty.mode: expected permissions"),
+    ("[[board]]\npty = { group = '' }\n", "board[0].pty.group: expected a non-empty string"),
+    ("[[board]]\npty = { group = 20 }\n", "board[0].pty.group: expected a non-empty string"),
+    (
+        "[[board]]\npty = 'a/b'\n[[board]]\npty = 'a/./b'\n",
+        "board[1].pty: expected a link no other endpoint uses, got ",
+    ),
+    # log
+    ("[log]\nview = 'color'\n" + MINIMAL, "log.view: expected 'auto' or 'rich' or 'plain' or"),
+    ("[log]\nfile = 5\n" + MINIMAL, "log.file: expected a path, got 5"),
+    # inputs
+    (MINIMAL + "inputs = { 14 = true }\n", "board[0].inputs.14: expected a general-purpose I/O"),
+    (MINIMAL + "inputs = { a = true }\n", "board[0].inputs.a: expected a general-purpose I/O"),
+    (MINIMAL + "inputs = { 0 = 'low' }\n", "board[0].inputs.0: expected true (high) or false"),
+    (MINIMAL + "inputs = { 0 = true, 00 = false }\n", "board[0].inputs.00: input bit 0 is given"),
+    (MINIMAL + "inputs = [0]\n", "board[0].inputs: expected a table, got [0]"),
+    # axes
+    (MINIMAL + "[board.axes.U]\n", "board[0].axes.U: PC48-4E has axes X, Y, Z, T"),
+    (MINIMAL + "model = 'PC48-2'\n[board.axes.XY]\n", "board[0].axes.XY: PC48-2 has axes X, Y"),
+    (MINIMAL + "[board.axes.X]\n[board.axes.x]\n", "board[0].axes.x: axis X is given twice"),
+    (MINIMAL + "axes = { X = 1 }\n", "board[0].axes.X: expected a table, got 1"),
+    (
+        MINIMAL + "[board.axes.X]\nhome_low = 'zero'\n",
+        "board[0].axes.X.home_low: expected a number (motor steps), got 'zero'",
+    ),
+    (MINIMAL + "[board.axes.X]\nhome_low = true\n", "board[0].axes.X.home_low: expected a number"),
+    (
+        MINIMAL + "[board.axes.X]\nnegative_limit = -inf\n",
+        "board[0].axes.X.negative_limit: expected a finite number, got -inf",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nstart_position = nan\n",
+        "board[0].axes.X.start_position: expected a finite number, got nan",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nhome_switch = 'closed'\n",
+        "board[0].axes.X.home_switch: expected 'normally_open' or 'normally_closed', got 'closed'",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\npositive_limit = -20000000\n",
+        "board[0].axes.X.positive_limit: expected negative_limit below positive_limit, "
+        "got -1e+07 and -2e+07",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nnegative_limit = 20000000\n",
+        "board[0].axes.X.negative_limit: expected negative_limit below positive_limit",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nhome_low = 5\nhome_high = 5\n",
+        "board[0].axes.X.home_high: expected home_low below home_high, got 5 and 5",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 0\n",
+        "board[0].axes.X.encoder_counts_per_rev: expected an integer >= 1, got 0",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 1.5\n",
+        "board[0].axes.X.encoder_counts_per_rev: expected an integer >= 1, got 1.5",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nencoder_index = 4000\n",
+        "board[0].axes.X.encoder_index: expected an integer 0..3999 (below "
+        "encoder_counts_per_rev), got 4000",
+    ),
+    (
+        MINIMAL + "[board.axes.X]\nencoder_index = -1\n",
+        "board[0].axes.X.encoder_index: expected an integer >= 0",
+    ),
+    (
+        MINIMAL + "model = 'PC48-4'\n[board.axes.X]\nencoder_index = 0\n",
+        "board[0].axes.X.encoder_index: PC48-4 has no encoder on axis X (no encoder option)",
+    ),
+    (
+        MINIMAL + "model = 'PC48-6E'\n[board.axes.U]\nencoder_counts_per_rev = 500\n",
+        "board[0].axes.U.encoder_counts_per_rev: PC48-6E has no encoder on axis U "
+        "(encoders on X, Y)",
+    ),
+    # invalid TOML
+    (MINIMAL + "model = \n", "line 3, column 9: invalid TOML: Invalid value"),
+    (MINIMAL + 'tcp = "7002"\n', "line 3, column 13: invalid TOML: Cannot overwrite a value"),
+    ('[[board]]\nname = "open\n', "line 2, column 13: invalid TOML: Illegal character '\\n'"),
+]
+
+
+@pytest.mark.parametrize(("text", "expected"), FILE_ERRORS)
+def test_file_error_is_one_line_naming_file_and_key(
+    tmp_path: Path, text: str, expected: str
+) -> None:
+    message = load_error(tmp_path, text)
+    assert message.startswith(f"{tmp_path / 'omsd.toml'}: {expected}"), message
+
+
+def test_file_error_names_the_key_first(tmp_path: Path) -> None:
+    """The key path comes right after the file, so ``omsd: FILE: KEY: ...`` reads in order."""
+    message = load_error(tmp_path, MINIMAL + "[board.axes.U]\n")
+    assert message == f"{tmp_path / 'omsd.toml'}: board[0].axes.U: PC48-4E has axes X, Y, Z, T"
+
+
+def test_error_attributes(tmp_path: Path) -> None:
+    path = write(tmp_path, MINIMAL + "link = 'serial'\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert (info.value.source, info.value.key) == (str(path), "board[0].link")
+
+
+def test_odd_keys_are_quoted_and_stay_on_one_line(tmp_path: Path) -> None:
+    message = load_error(tmp_path, MINIMAL + '"a\\nb" = 1\n')
+    assert 'board[0]."a\\nb": unknown key' in message
+
+
+def test_long_values_are_shortened(tmp_path: Path) -> None:
+    message = load_error(tmp_path, f"[[board]]\ntcp = '{'9' * 500}'\n")
+    assert len(message) < 200 + len(str(tmp_path))
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    path = tmp_path / "nope.toml"
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value) == f"{path}: cannot read the file: No such file or directory"
+
+
+def test_directory_instead_of_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError) as info:
+        load_config(tmp_path)
+    assert str(info.value) == f"{tmp_path}: cannot read the file: Is a directory"
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads files whatever their permissions")
+def test_unreadable_file(tmp_path: Path) -> None:
+    path = write(tmp_path, MINIMAL)
+    path.chmod(0)
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value) == f"{path}: cannot read the file: Permission denied"
+
+
+def test_file_that_is_not_utf8(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(b"# caf\xe9\n" + MINIMAL.encode())
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value) == f"{path}: expected UTF-8 text, got byte 0xe9 at offset 5"
+
+
+def test_source_is_the_path_as_given(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    write(tmp_path, MINIMAL + "link = 'x'\n")
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError) as info:
+        load_config("omsd.toml")
+    assert str(info.value).startswith("omsd.toml: board[0].link: ")
+    assert load_config(write(tmp_path, MINIMAL, "ok.toml")).source == str(tmp_path / "ok.toml")
+
+
+def test_port_zero_may_repeat_and_different_families_do_not_collide(tmp_path: Path) -> None:
+    text = (
+        "[[board]]\ntcp = [0, '0.0.0.0:0', '0.0.0.0:7001']\n"
+        "[[board]]\ntcp = [0, '[::]:7001', 'localhost:7002']\n"
+        "[[board]]\ntcp = ['127.0.0.1:7002', '[::1]:7003', '127.0.0.1:7003']\n"
+    )
+    boards = load_config(write(tmp_path, text)).boards
+    assert [len(b.tcp) for b in boards] == [3, 3, 3]
+
+
+# -- the command line ---------------------------------------------------------------------------
+
+
+def test_no_options_give_the_default_endpoints(_runtime_dir: Path) -> None:
+    config = from_options(None, [], [], None, None, None)
+    assert config.boards == default_config().boards
+    assert config.log == LogConfig()
+    assert config.source == "command line"
+
+
+@pytest.mark.parametrize(
+    ("text", "endpoint"),
+    [
+        ("7001", TcpEndpoint("127.0.0.1", 7001)),
+        ("0", TcpEndpoint("127.0.0.1", 0)),
+        ("65535", TcpEndpoint("127.0.0.1", 65535)),
+        ("0.0.0.0:7001", TcpEndpoint("0.0.0.0", 7001)),
+        ("192.168.1.20:7001", TcpEndpoint("192.168.1.20", 7001)),
+        ("localhost:7001", TcpEndpoint("localhost", 7001)),
+        ("oms-sim.lab.example:7001", TcpEndpoint("oms-sim.lab.example", 7001)),
+        ("[::1]:7001", TcpEndpoint("::1", 7001)),
+        ("[::]:7001", TcpEndpoint("::", 7001)),
+        ("[fe80::1%eth0]:7001", TcpEndpoint("fe80::1%eth0", 7001)),
+        ("007001", None),  # more than five digits
+    ],
+)
+def test_tcp_option(text: str, endpoint: TcpEndpoint | None) -> None:
+    if endpoint is None:
+        assert "--tcp: expected [HOST:]PORT" in option_error(tcp=[text])
+        return
+    b = board(tcp=[text])
+    assert b.tcp == (endpoint,)
+    assert b.pty == ()  # only the kind given
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("abc", "--tcp: expected [HOST:]PORT with PORT 0..65535, got 'abc'"),
+        ("", "--tcp: expected [HOST:]PORT with PORT 0..65535, got ''"),
+        ("65536", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '65536'"),
+        ("-1", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '-1'"),
+        ("+7001", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '+7001'"),
+        (" 7001", "--tcp: expected [HOST:]PORT with PORT 0..65535, got ' 7001'"),
+        ("7_001", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '7_001'"),
+        ("localhost", "--tcp: expected [HOST:]PORT with PORT 0..65535, got 'localhost'"),
+        ("localhost:", "--tcp: expected [HOST:]PORT with PORT 0..65535, got 'localhost:'"),
+        ("::1:7001", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '::1:7001'"),
+        ("[::1:7001", "--tcp: expected [HOST:]PORT with PORT 0..65535, got '[::1:7001'"),
+        (
+            ":7001",
+            "--tcp: expected [HOST:]PORT with a HOST before the colon (0.0.0.0 for every "
+            "interface), got ':7001'",
+        ),
+        ("[]:7001", "--tcp: expected [HOST:]PORT with an IPv6 address inside [ ], got '[]:7001'"),
+        (
+            "[1.2.3.4]:7001",
+            "--tcp: expected [HOST:]PORT with an IPv6 address inside [ ], got '[1.2.3.4]:7001'",
+        ),
+        (
+            "1.2.3.999:7001",
+            "--tcp: expected [HOST:]PORT with a valid IPv4 address, got '1.2.3.999:7001'",
+        ),
+        (
+            "my host:7001",
+            "--tcp: expected [HOST:]PORT with HOST an address or a host name, got 'my host:7001'",
+        ),
+        (
+            "-x:7001",
+            "--tcp: expected [HOST:]PORT with HOST an address or a host name, got '-x:7001'",
+        ),
+    ],
+)
+def test_tcp_option_errors(text: str, expected: str) -> None:
+    assert option_error(tcp=[text]) == expected
+
+
+def test_tcp_option_given_twice_is_an_error() -> None:
+    assert option_error(tcp=["7001", "127.0.0.1:7001"]) == (
+        "--tcp: expected an address no other endpoint uses, got '127.0.0.1:7001' twice"
+    )
+    assert "twice" in option_error(tcp=["0.0.0.0:7001", "7001"])
+
+
+def test_pty_option_only(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    b = board(pty=["ttyOMS", "/run/omsd/b", "~/x"])
+    assert b.tcp == ()
+    assert b.pty == (
+        PtyEndpoint(tmp_path / "ttyOMS"),  # made absolute against the working directory
+        PtyEndpoint(Path("/run/omsd/b")),
+        PtyEndpoint(Path.home() / "x"),
+    )
+    assert option_error(pty=[""]) == "--pty: expected a path, got ''"
+    assert option_error(pty=["a", "./a"]).startswith(
+        "--pty: expected a link no other endpoint uses, got "
+    )
+
+
+def test_tcp_and_pty_options_together() -> None:
+    b = board(tcp=["7001"], pty=["/tmp/x"])
+    assert b.tcp == (TcpEndpoint("127.0.0.1", 7001),)
+    assert b.pty == (PtyEndpoint(Path("/tmp/x")),)
+
+
+def test_board_option_is_case_insensitive() -> None:
+    assert board(board="pc48-6e").model == "PC48-6E"
+    assert board(board=" PC48-2 ").model == "PC48-2"
+    assert board().model == "PC48-4E"
+    assert option_error(board="PC99").startswith(
+        "--board: expected a board model (PC48-2, PC48-4, "
+    )
+    assert option_error(board="PC99").endswith("got 'PC99'")
+
+
+def test_link_option() -> None:
+    assert board().link == "driver"
+    assert board(link="raw").link == "raw"
+    assert board(link="RAW").link == "raw"
+    assert option_error(link="serial") == "--link: expected 'driver' or 'raw', got 'serial'"
+
+
+@pytest.mark.parametrize(
+    ("text", "value"),
+    [("0D", 0x0D), ("0d", 0x0D), ("0x0d", 0x0D), ("0X0A", 0x0A), ("D", 0x0D), ("ff", 0xFF)],
+)
+def test_eos_option_is_hex_like_the_drivers_e_option(text: str, value: int) -> None:
+    assert board(eos=text).eos == value
+
+
+@pytest.mark.parametrize("text", ["", "100", "0x", "GG", "13h", "-1", "0x100"])
+def test_eos_option_errors(text: str) -> None:
+    assert option_error(eos=text) == (
+        '--eos: expected a character code 00..FF in hex like the driver\'s E:XX ("0D"), '
+        f"got {text!r}"
+    )
+
+
+def test_eos_option_on_a_raw_link_is_an_error() -> None:
+    assert option_error(link="raw", eos="0D") == (
+        "--eos: is a driver link setting; a raw link keeps the board's own LF/CR framing"
+    )
+
+
+def test_log_option(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    config = from_options(None, ["7001"], [], None, None, "traffic.jsonl")
+    assert config.log == LogConfig(tmp_path / "traffic.jsonl", "auto")
+    assert option_error(log="") == "--log: expected a path, got ''"
+
+
+def test_option_errors_come_before_defaults_are_used() -> None:
+    """An error in one option is reported even when the others are valid."""
+    assert option_error(tcp=["7001"], board="x").startswith("--board: ")
+    assert option_error(tcp=["x"], board="pc48-4").startswith("--tcp: ")
+
+
+def test_file_with_a_byte_order_mark_loads(tmp_path: Path) -> None:
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + MINIMAL.encode())
+    assert load_config(path).boards[0].tcp == (TcpEndpoint("127.0.0.1", 7001),)
