@@ -2,7 +2,7 @@
 #
 #   docker build -t omsd .
 #   docker run --rm -p 7048:7048 omsd                      # a PC48-4E on localhost:7048
-#   docker run --rm -p 7001-7003:7001-7003 --no-healthcheck omsd --config /etc/omsd/ci.toml
+#   docker run --rm -p 7001-7003:7001-7003 omsd --config /etc/omsd/ci.toml
 #   docker run --rm omsd models                            # anything after the image: omsd's args
 #
 # docs/deploy.md has a compose file and how to point a client at it.
