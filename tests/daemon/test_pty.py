@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import stat
+import subprocess
 import termios
 from pathlib import Path
 
@@ -95,3 +96,34 @@ def test_pty_write_larger_than_the_driver_buffer(omsd: Omsd, tmp_path: Path) -> 
         assert port.read(2 * 60) == b"3\n" * 60
         port.timeout = 0.1
         assert port.read(100) == b""
+
+
+def _cat_round(link: Path, position: int) -> None:
+    reader = subprocess.Popen(["cat", str(link)], stdout=subprocess.PIPE)
+    try:
+        assert reader.stdout is not None
+        out = reader.stdout
+        os.set_blocking(out.fileno(), False)
+        got = bytearray()
+
+        def answered(text: bytes) -> bool:
+            got.extend(out.read() or b"")
+            return text in got
+
+        subprocess.run(["sh", "-c", f"printf 'AX LP{position} RP' > '{link}'"], check=True)
+        assert wait_for(lambda: answered(f"{position}\n".encode())), bytes(got)
+        subprocess.run(["sh", "-c", f"printf 'WY' > '{link}'"], check=True)
+        assert wait_for(lambda: answered(b"PC48 ver 3.00-4\n")), bytes(got)
+    finally:
+        reader.kill()
+        reader.wait()
+
+
+def test_cat_reads_what_the_board_answers_to_another_writer(omsd: Omsd, tmp_path: Path) -> None:
+    """The shell way: ``cat`` on the pty in one process, ``printf ... > pty`` in others. They
+    share one terminal, so the board's answers reach the reader; and cat can be stopped and
+    started again any number of times."""
+    link = tmp_path / "board1"
+    omsd("--pty", str(link))
+    for position in range(3):
+        _cat_round(link, position)
