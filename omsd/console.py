@@ -14,20 +14,9 @@ import sys
 import time
 from typing import BinaryIO, TextIO
 
-from omsd.board import Board, CommandErrorEvent, DoneEvent, LimitEvent, Reply, SlipEvent
+from omsd.board import Board, Reply
+from omsd.board.events import describe
 from omsd.models import Model
-
-
-def describe(event: object) -> str:
-    if isinstance(event, DoneEvent):
-        return f"[done: register {event.done_register:02X}]"
-    if isinstance(event, LimitEvent):
-        return f"[limit: {event.axis} {'+' if event.direction > 0 else '-'}]"
-    if isinstance(event, SlipEvent):
-        return f"[slip: {event.axis}]"
-    if isinstance(event, CommandErrorEvent):
-        return f"[command error: {event.kind.message}: {event.command}]"
-    return f"[{event}]"
 
 
 def run(model: Model, stdin: BinaryIO, stdout: BinaryIO, notes: TextIO) -> int:
@@ -67,7 +56,7 @@ def run(model: Model, stdin: BinaryIO, stdout: BinaryIO, notes: TextIO) -> int:
                 stdout.write(item.data)
                 stdout.flush()
             else:
-                notes.write(describe(item) + "\n")
+                notes.write(f"[{describe(item)}]\n")
                 notes.flush()
         if eof and deadline is None:
             break

@@ -23,14 +23,8 @@ import time
 import traceback
 from typing import Protocol
 
-from omsd.board import (
-    Board,
-    CommandErrorEvent,
-    DoneEvent,
-    Event,
-    LimitEvent,
-    SlipEvent,
-)
+from omsd.board import Board
+from omsd.board.events import describe
 from omsd.config import BoardConfig
 from omsd.link import Link, make_link
 from omsd.models import get_model
@@ -49,18 +43,6 @@ class Client(Protocol):
     def input_room(self) -> None:
         """The link may take more of what this client has written: try again."""
         ...
-
-
-def describe_event(event: Event) -> str:
-    if isinstance(event, DoneEvent):
-        return f"done (register {event.done_register:02X})"
-    if isinstance(event, LimitEvent):
-        return f"limit {event.axis}{'+' if event.direction > 0 else '-'}"
-    if isinstance(event, SlipEvent):
-        return f"slip {event.axis}"
-    if isinstance(event, CommandErrorEvent):
-        return f"command error: {event.kind.message}: {event.command}"
-    return str(event)
 
 
 class BoardService:
@@ -151,7 +133,7 @@ class BoardService:
             self._reschedule()
             return
         for event in out.events:
-            self.log.event(time.time(), self.name, describe_event(event))
+            self.log.event(time.time(), self.name, describe(event))
         if out.data:
             client = self.active
             label = client.label if client is not None else "(no client)"

@@ -73,7 +73,19 @@ __all__ = [
     "Output",
     "Reply",
     "SlipEvent",
+    "describe",
 ]
 
 Event = DoneEvent | LimitEvent | SlipEvent | CommandErrorEvent
 Output = Reply | Event
+
+
+def describe(event: Event) -> str:
+    """One line for logs and consoles."""
+    if isinstance(event, DoneEvent):
+        return f"done (register {event.done_register:02X})"
+    if isinstance(event, LimitEvent):
+        return f"limit {event.axis}{'+' if event.direction > 0 else '-'}"
+    if isinstance(event, SlipEvent):
+        return f"slip {event.axis}"
+    return f"command error: {event.kind.message}: {event.command}"
