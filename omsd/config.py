@@ -73,7 +73,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from omsd.board.world import AxisWorld, SwitchType
-from omsd.models import MODELS, UnknownModel, get_model
+from omsd.models import MODELS, UnknownModel, get_model, variant
 from omsd.models.spec import Model
 
 DEFAULT_TCP_PORT = 7048
@@ -139,6 +139,13 @@ class BoardConfig:
     second_client: str = "takeover"  # a new TCP client replaces the connected one, or "refuse"
     world: Mapping[str, AxisWorld] = field(default_factory=_no_world)  # axis letter -> world
     inputs: Mapping[int, bool] = field(default_factory=_no_inputs)  # input bit -> high?
+    encoders: str | None = None  # axes fitted with encoders, if not the model's (VS4 option)
+    serial: str | None = None  # serial number WY reports (VS4), if not the model's
+    firmware: str | None = None  # firmware revision WY reports, if not the model's
+
+    def personality(self) -> Model:
+        """The model as fitted and labelled on this board."""
+        return variant(get_model(self.model), self.encoders, self.serial, self.firmware)
 
     def __post_init__(self) -> None:
         # Frozen all the way down, whatever the caller passed.
@@ -419,6 +426,9 @@ _BOARD_KEYS = (
     "second_client",
     "inputs",
     "axes",
+    "encoders",
+    "serial",
+    "firmware",
 )
 _PTY_KEYS = ("link", "group", "mode")
 _LOG_KEYS = ("file", "view")
@@ -562,6 +572,10 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
     second = _choice(
         table.get("second_client", "takeover"), SECOND_CLIENT_POLICIES, at.key("second_client")
     )
+    encoders = _encoders(table.get("encoders"), at.key("encoders"), model)
+    serial = _label(table.get("serial"), at.key("serial"), r"[A-Za-z0-9-]{1,16}", "a serial number")
+    firmware = _label(table.get("firmware"), at.key("firmware"), r"\d{1,2}\.\d{2}", "a version")
+    model = variant(model, encoders, serial, firmware)
     world = _worlds(table.get("axes", {}), at.key("axes"), model)
     inputs = _inputs(table.get("inputs", {}), at.key("inputs"), model)
     board = BoardConfig(
@@ -575,8 +589,31 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
         second_client=second,
         world=world,
         inputs=inputs,
+        encoders=encoders,
+        serial=serial,
+        firmware=firmware,
     )
     return _Parsed(board, at, tcp, pty)
+
+
+def _encoders(value: object, at: _At, model: Model) -> str | None:
+    """``true`` (the model's), ``false`` (none: a board ordered without the encoder option) or
+    the letters of the axes that have one."""
+    if value is None or value is True:
+        return None
+    if value is False:
+        return ""
+    if isinstance(value, str) and value and set(value.upper()) <= set(model.axes):
+        return "".join(a for a in model.axes if a in value.upper())
+    raise at.expected(f"true, false or axis letters of {''.join(model.axes)}", value)
+
+
+def _label(value: object, at: _At, pattern: str, what: str) -> str | None:
+    if value is None:
+        return None
+    if isinstance(value, str) and re.fullmatch(pattern, value):
+        return value
+    raise at.expected(f"{what} like {pattern!r}", value)
 
 
 def _also(at: _At, other: _At) -> str:

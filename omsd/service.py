@@ -27,7 +27,6 @@ from omsd.board import Board
 from omsd.board.events import describe
 from omsd.config import BoardConfig
 from omsd.link import Link, make_link
-from omsd.models import get_model
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
 
 
@@ -59,7 +58,7 @@ class BoardService:
         # the board runs on the loop's monotonic clock, so loop.call_at can wake it exactly
         self.clock = loop.time
         now = self.clock()
-        self.model = get_model(config.model)
+        self.model = config.personality()
         self.board = Board(self.model, now=now, world=dict(config.world))
         for bit, high in config.inputs.items():
             self.board.set_input(bit, high, now)

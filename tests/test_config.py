@@ -23,6 +23,7 @@ from omsd.config import (
     from_options,
     load_config,
 )
+from omsd.models import MODELS
 
 CONFIG_DIR = Path(__file__).resolve().parent.parent / "config"
 
@@ -327,8 +328,7 @@ FILE_ERRORS = [
     # model
     (
         MINIMAL + "model = 'PC99'\n",
-        "board[0].model: expected a board model (PC48-2, PC48-4, PC48-6, PC48-8, PC48-2E, "
-        "PC48-4E, PC48-6E), got 'PC99'",
+        f"board[0].model: expected a board model ({', '.join(MODELS)}), got 'PC99'",
     ),
     (MINIMAL + "model = 4\n", "board[0].model: expected a board model"),
     # link and driver settings

@@ -64,7 +64,7 @@ class Board:
         self.clock = SampleClock(model.sample_rate, now)
         self.now = now
         self.world = WorldState()
-        self.registers = Registers()
+        self.registers = Registers(irq_or=model.irq_status_or)
         self._output: list[Output] = []
         self.executor = Executor(self)
         self.interpreter = Interpreter(self)
@@ -249,6 +249,19 @@ class Board:
 
     def read_control_register(self, now: float) -> int:
         return self.registers.control
+
+    def write_vector_register(self, value: int, now: float) -> None:
+        """VME boards (VS4): "Interrupt Vector", a read/write byte returned during IACK."""
+        self._need_vector()
+        self.registers.vector = value & 0xFF
+
+    def read_vector_register(self, now: float) -> int:
+        self._need_vector()
+        return self.registers.vector
+
+    def _need_vector(self) -> None:
+        if not self.model.vector_register:
+            raise ValueError(f"a {self.model.name} has no interrupt vector register")
 
     # -- used by the interpreter and the executor -----------------------------------------------
 

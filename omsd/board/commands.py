@@ -94,7 +94,7 @@ def _ef(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.echo = False
 
 
-@handles("HH", "HL", "LF", "LN", "SL", "SF", "CN", "MO", "HF", "HN", "IS", "ET", "RB")
+@handles("HH", "HL", "MO", "HF", "HN", "IS", "ET", "RB")
 def _simple(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """Single-axis commands with no operand that queue one op on the current axis."""
     if cmd.fields:
@@ -103,6 +103,31 @@ def _simple(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if cmd.mnemonic == "MO" and axis.has_encoder:
         raise CommandFailed(ErrorKind.ENCODER_MODEL)
     ix.enqueue([(axis, Op(cmd.mnemonic, (), ix.cost(cell, axis)))])
+
+
+@handles("LN", "LF", "SL", "SF")
+def _limits(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Limit switch modes. Single-axis on the PC48; the VS4 manual also shows the AA form
+    (``AA LN,,,1;``: the fields pick the axes, as for AN; ``AA SF``: no fields, all axes)."""
+    if ix.mode == "single":
+        if cmd.fields:
+            raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
+        axes = [ix.axis]
+    else:
+        picked = ix.per_axis(cmd)
+        axes = [ix.board.axes[i] for i in picked] if picked else list(ix.board.axes)
+    ix.enqueue([(a, Op(cmd.mnemonic, (), ix.cost(cell, a))) for a in axes])
+
+
+@handles("CN")
+def _cn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Cosine ramps for all axes: queued (1 slot) on the PC48, immediate on the VS4."""
+    if cmd.fields:
+        raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
+    if cell.kind is Kind.IMMEDIATE:
+        ix.board.ramp = pf.RampShape(pf.RampKind.COSINE)
+        return
+    ix.enqueue([(ix.axis, Op("CN", (), ix.cost(cell, ix.axis)))])
 
 
 @handles("PN")
@@ -238,13 +263,21 @@ def _parameter(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("LP")
 def _lp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "If no parameter is supplied, the value of zero is used." Range ±33,554,431.
-    axis = ix.axis
-    raw = ix.one(cmd, required=False)
-    value = ix.convert(axis, raw, "dist") if raw is not None else 0.0
+    # "If no parameter is supplied, the value of zero is used." Range ±33,554,431. (The VS4
+    # manual also shows ``AA LP1000``: "would load the X axis position register with 1000".)
+    if ix.mode == "single":
+        raw = ix.one(cmd, required=False)
+        items = {ix.axis_index: raw if raw is not None else Decimal(0)}
+    else:
+        items = ix.per_axis(cmd)
     limit = ix.board.model.load_position_limit
-    check_range(value, -limit, limit)
-    ix.enqueue([(axis, Op("LP", (value,), ix.cost(cell, axis)))])
+    ops = []
+    for index, raw_value in items.items():
+        axis = ix.board.axes[index]
+        value = ix.convert(axis, raw_value, "dist")
+        check_range(value, -limit, limit)
+        ops.append((axis, Op("LP", (value,), ix.cost(cell, axis))))
+    ix.enqueue(ops)
 
 
 def _check_target(ix: Interpreter, value: float) -> float:
@@ -337,7 +370,7 @@ def _jog(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     raw = ix.one(cmd)
     assert raw is not None
     v = ix.convert(axis, raw, "frac" if cmd.mnemonic == "JF" else "vel")
-    limit = ix.board.model.max_velocity
+    limit = ix.board.model.jog_limit
     check_range(v, -limit, limit)
     ix.enqueue([(axis, Op(cmd.mnemonic, (v,), ix.cost(cell, axis)))])
 
@@ -412,6 +445,13 @@ def _loop_axes(ix: Interpreter) -> list[Axis]:
 def _ls(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # Summary: "from 1 to 32000 loops"
     n = ix.integer(ix.one(cmd), 1, 32_000)
+    if ix.contour is not None:
+        # the VS4 table accepts LS in a contour definition (2 slots) although LE is not valid
+        # there and "The CX command cannot be placed within a loop": it takes its slots and
+        # does nothing else
+        if not ix.contour.add(None, ix.cost(cell, ix.axis)):
+            raise CommandFailed(ErrorKind.CONTOUR_FULL)
+        return
     axes = _loop_axes(ix)
     ix.open_loop("LS", axes)
     ix.enqueue([(a, Op("LS", (n,), ix.cost(cell, a))) for a in axes])
@@ -566,7 +606,17 @@ def _in(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("IP")
 def _ip(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    ix.enqueue([(ix.axis, Op("IP", (), ix.cost(cell, ix.axis)))])
+    board = ix.board
+    if ix.mode == "single":
+        ix.enqueue([(ix.axis, Op("IP", (), ix.cost(cell, ix.axis)))])
+        return
+    # VS4 AA form: like ID, DON_S once every encoder axis of the task is in position
+    members = [i for i in _task_axes(ix) if board.axes[i].has_encoder]
+    group = SyncGroup(set(members), barrier=False)
+    group.action = lambda g, when: board.signal_done(when)
+    ix.enqueue(
+        [(board.axes[i], Op("IP", (), ix.cost(cell, board.axes[i]), group)) for i in members]
+    )
 
 
 @handles("IC")
@@ -726,11 +776,18 @@ def _reset_flags(ix: Interpreter, axes: list[Axis], t: float) -> None:
 
 @handles("UU")
 def _uu(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    value = ix.one(cmd)
-    assert value is not None
-    if not 0 < value <= 1_000_000_000:
-        raise CommandFailed(ErrorKind.OUT_OF_RANGE)
-    ix.axis.uu = None if value == 1 else value
+    # single-axis on the PC48; the VS4 manual also shows ``AA UU10000,10000,10000;``
+    if ix.mode == "single":
+        value = ix.one(cmd)
+        assert value is not None
+        items = {ix.axis_index: value}
+    else:
+        items = ix.per_axis(cmd)
+    for value in items.values():
+        if not 0 < value <= 1_000_000_000:
+            raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+    for index, value in items.items():
+        ix.board.axes[index].uu = None if value == 1 else value
 
 
 @handles("UF")
@@ -808,9 +865,14 @@ def _re(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("MP", "MM")
 def _direction(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Direction for MV and MO: immediate on the PC48, one queued slot on the VS4."""
+    direction = 1 if cmd.mnemonic == "MP" else -1
+    if cell.kind is Kind.QUEUED:
+        ix.enqueue([(ix.axis, Op("DIR", (direction,), ix.cost(cell, ix.axis)))])
+        return
     for axis in ix.context_axes():
         if axis.motion is Motion.IDLE:
-            axis.direction = 1 if cmd.mnemonic == "MP" else -1
+            axis.direction = direction
 
 
 @handles("MV")

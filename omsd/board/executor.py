@@ -209,6 +209,10 @@ class Executor:
         self.board.soft_limits = False
         return None
 
+    def _op_DIR(self, axis: Axis, op: Op, t: float) -> Result:
+        axis.direction = op.args[0]
+        return None
+
     def _op_CN(self, axis: Axis, op: Op, t: float) -> Result:
         self.board.ramp = pf.RampShape(pf.RampKind.COSINE)
         return None
@@ -327,8 +331,15 @@ class Executor:
         # PC48 §6.12: "like the ID command, except the interrupt is deferred until the stage is
         # within the specified deadband ... If the position hold HN is not enabled for an axis,
         # the command will behave like an ID command for that axis."
+        group = op.group
+
         def done(when: float) -> None:
-            self.board.set_done([axis], when, interrupt=True)
+            if group is None:
+                self.board.set_done([axis], when, interrupt=True)
+                return
+            self.board.set_done([axis], when, interrupt=False)
+            group.arrive(axis.index)
+            self.check_group(group, when)
 
         if axis.hold and not (axis.in_position and axis.motion is Motion.IDLE):
             return Wait("inpos", then=done)

@@ -172,6 +172,8 @@ class Interpreter:
         if spec.not_on_encoder_models and model.encoder_option:
             raise CommandFailed(ErrorKind.ENCODER_MODEL)
         if spec.single_axes is not None and self.axis.letter not in spec.single_axes:
+            if spec.other_axes_ignored:
+                return  # VS4 VS in AY-AT: "Ignored"
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
         if cmd.error is not None:
             raise CommandFailed(cmd.error)

@@ -41,6 +41,8 @@ class Registers:
     done: int = 0  # done flag register latch
     status: int = 0  # latched bits: CMD_S, ENC_S, OVRT, DON_S (INIT/TBE/IBF are computed)
     control: int = 0
+    vector: int = 0  # VME interrupt vector (VS4 offset 9)
+    irq_or: bool = False  # VS4: "Bit 7 is the logical OR of bits 4 through 6"
 
     def set_done(self, mask: int) -> None:
         self.done |= mask
@@ -57,7 +59,10 @@ class Registers:
             value |= TBE_S
         if output_pending:
             value |= IBF_S
-        if self.irq_pending(input_room, output_pending):
+        if self.irq_or:
+            if value & (DON_S | IBF_S | TBE_S):
+                value |= IRQ_S
+        elif self.irq_pending(input_room, output_pending):
             value |= IRQ_S
         return value
 

@@ -86,6 +86,7 @@ class CommandSpec:
     encoder_only: bool = False  # "AX - AT ... NO ENCODER Not valid"
     not_on_encoder_models: bool = False  # MO
     single_axes: str | None = None  # VS: "You must be in the AX mode"
+    other_axes_ignored: bool = False  # VS4 VS: "AY - AT Ignored" rather than "Not valid"
 
     def cell(self, mode: str) -> Cell:
         if mode == "single":
@@ -112,7 +113,7 @@ class Model:
     contour_queue: int  # slots in the contour queue, 0 without contouring
     commands: Mapping[str, CommandSpec]
     firmware: str
-    wy_format: str  # str.format with model, family, firmware, axes (count)
+    wy_format: str  # str.format with model, family, firmware, axes (count), serial
     max_velocity: float
     max_acceleration: float  # exclusive upper bound
     default_velocity: float
@@ -125,6 +126,10 @@ class Model:
     done_bits: tuple[int, ...]  # done-flag register bit per axis, in ``axes`` order
     velocity_stream_rate: int = 1024  # VS time unit: "1/1024 second sample intervals"
     init_time: float = 0.1  # seconds the INIT bit stays high after RS
+    max_jog_velocity: float | None = None  # JG/JF range where it differs from VL's
+    serial: str = ""  # serial number, for a WY that reports one (VS4)
+    vector_register: bool = False  # VME: the interrupt vector register (VS4 offset 9)
+    irq_status_or: bool = False  # VS4: IRQ_S "is the logical OR of bits 4 through 6"
     aliases: tuple[str, ...] = field(default=())
 
     @property
@@ -134,7 +139,19 @@ class Model:
     def has_encoder(self, axis: str) -> bool:
         return axis in self.encoder_axes
 
+    @property
+    def contouring(self) -> bool:
+        return self.contour_queue > 0
+
+    @property
+    def jog_limit(self) -> float:
+        return self.max_jog_velocity if self.max_jog_velocity is not None else self.max_velocity
+
     def who_are_you(self) -> str:
         return self.wy_format.format(
-            model=self.name, family=self.family, firmware=self.firmware, axes=len(self.axes)
+            model=self.name,
+            family=self.family,
+            firmware=self.firmware,
+            axes=len(self.axes),
+            serial=self.serial,
         )
