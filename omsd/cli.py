@@ -16,11 +16,9 @@ import asyncio
 import sys
 
 from omsd import __version__
-from omsd.config import VIEWS, ConfigError, from_options, load_config
+from omsd.config import DEFAULT_MODEL, VIEWS, ConfigError, from_options, load_config
 from omsd.link import KINDS
 from omsd.models import MODELS, UnknownModel, get_model
-
-DEFAULT_MODEL = "PC48-4E"
 
 
 class _Parser(argparse.ArgumentParser):

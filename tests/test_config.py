@@ -159,17 +159,19 @@ def test_example_lab_setup_shows_every_key() -> None:
     text = (CONFIG_DIR / "omsd.toml").read_text()
     keys = [
         *("file", "view", "name", "model", "link", "eos", "buffer", "tcp", "pty"),
-        *("group", "mode", "second_client", "inputs"),
+        *("group", "mode", "second_client", "inputs", "encoders", "serial", "firmware"),
         *(f.name for f in dataclasses.fields(AxisWorld)),
     ]
     code = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
     for key in keys:
         assert re.search(rf"\b{key} = ", code), key
     config = load_config(CONFIG_DIR / "omsd.toml")
-    xy, slits = config.boards
+    xy, slits, crate = config.boards
     assert xy.world["X"].home_switch is SwitchType.NORMALLY_CLOSED
     assert xy.pty[0].group == "dialout" and xy.pty[0].mode == 0o660
     assert slits.model == "PC48-8" and slits.eos == 0x0D and slits.buffer_size == 0x800
+    assert crate.personality().who_are_you() == "VS4-040 ver 1.04 S/N 000217"
+    assert crate.personality().encoder_axes == "XY"
 
 
 def test_example_epics_board_is_a_pc48_4_on_the_raw_link() -> None:
@@ -700,3 +702,50 @@ def test_file_with_a_byte_order_mark_loads(tmp_path: Path) -> None:
     path = tmp_path / "bom.toml"
     path.write_bytes(b"\xef\xbb\xbf" + MINIMAL.encode())
     assert load_config(path).boards[0].tcp == (TcpEndpoint("127.0.0.1", 7001),)
+
+
+# -- the board as fitted: encoders, serial number, firmware ---------------------------------------
+
+
+def test_encoder_option_serial_and_firmware(tmp_path: Path) -> None:
+    path = tmp_path / "omsd.toml"
+    path.write_text(
+        "[[board]]\nmodel = 'VS4-040'\ntcp = 0\nencoders = false\nserial = '000217'\n"
+        "firmware = '1.04'\n\n[[board]]\nmodel = 'VS4-040'\ntcp = 0\nencoders = 'zx'\n"
+        "[board.axes.Z]\nencoder_index = 5\n"
+    )
+    plain, partial = load_config(path).boards
+    model = plain.personality()
+    assert model.encoder_axes == ""
+    assert model.who_are_you() == "VS4-040 ver 1.04 S/N 000217"
+    assert partial.personality().encoder_axes == "XZ"
+    assert partial.personality().who_are_you() == "VS4-040 ver 1.00 S/N 123456"
+
+
+@pytest.mark.parametrize(
+    ("line", "key"),
+    [
+        ("encoders = 'XU'", "board[0].encoders"),
+        ("encoders = 3", "board[0].encoders"),
+        ("serial = 'a b'", "board[0].serial"),
+        ("firmware = 'v1'", "board[0].firmware"),
+    ],
+)
+def test_bad_encoder_serial_firmware(tmp_path: Path, line: str, key: str) -> None:
+    path = tmp_path / "omsd.toml"
+    path.write_text(f"[[board]]\nmodel = 'VS4-040'\ntcp = 0\n{line}\n")
+    with pytest.raises(ConfigError) as err:
+        load_config(path)
+    assert f": {key}: expected" in str(err.value)
+    assert "\n" not in str(err.value)
+
+
+def test_encoder_settings_follow_the_fitted_encoders(tmp_path: Path) -> None:
+    """With ``encoders = false`` an axis has no encoder, so its encoder settings are a mistake."""
+    path = tmp_path / "omsd.toml"
+    path.write_text(
+        "[[board]]\nmodel = 'VS4-040'\ntcp = 0\nencoders = false\n"
+        "[board.axes.X]\nencoder_index = 5\n"
+    )
+    with pytest.raises(ConfigError, match="has no encoder on axis X"):
+        load_config(path)
