@@ -292,3 +292,18 @@ def test_bytes_held_by_a_wait_go_on_when_the_board_releases_it_by_itself() -> No
     h.run(1.0)
     assert h.take() == b"!\x01\n500\n500\n"
     assert h.link.pending == 0
+
+
+@pytest.mark.parametrize("name", sorted(__import__("omsd.models").models.MODELS))
+def test_both_links_work_with_every_model(name: str) -> None:
+    """Every personality through the driver link (framing stripped, markers) and the raw link
+    (native framing, a lone # on error)."""
+    model = get_model(name)
+    wy = model.who_are_you().encode()
+    fields = ",".join("0" for _ in model.axes).encode()
+    h = Host(DriverLink(Board(model, 0.0)))
+    h.write(b"WY AA RP ZZ AX ID ")
+    assert h.take() == wy + b"\n" + fields + b"\n#\n!\x01\n"
+    r = Host(RawLink(Board(model, 0.0)))
+    r.write(b"WY AA RP ZZ AX ID ")
+    assert r.take() == b"\n\r" + wy + b"\n\r\n\r" + fields + b"\n\r#"
