@@ -7,7 +7,7 @@ import pytest
 from omsd.board import Board, DoneEvent, LimitEvent
 from omsd.board.world import AxisWorld
 from omsd.link import DriverLink, RawLink
-from omsd.models import get_model
+from omsd.models import MODELS, get_model
 
 
 class Host:
@@ -294,7 +294,7 @@ def test_bytes_held_by_a_wait_go_on_when_the_board_releases_it_by_itself() -> No
     assert h.link.pending == 0
 
 
-@pytest.mark.parametrize("name", sorted(__import__("omsd.models").models.MODELS))
+@pytest.mark.parametrize("name", sorted(MODELS))
 def test_both_links_work_with_every_model(name: str) -> None:
     """Every personality through the driver link (framing stripped, markers) and the raw link
     (native framing, a lone # on error)."""
