@@ -72,17 +72,20 @@ class Syntax(Enum):
     """What a mnemonic is to the lexer."""
 
     UNKNOWN = auto()
-    BARE = auto()  # complete at its second letter
+    BARE = auto()  # complete at its last character
     OPTIONAL = auto()  # may be followed by an operand; a space ends it
     REQUIRED = auto()  # expects an operand; spaces before it are skipped
+    AXIS = auto()  # expects an operand that starts with an axis letter (PCIx EGX2,1;)
 
 
 class _State(Enum):
     IDLE = auto()
-    LETTER = auto()  # one letter of a mnemonic seen
+    MNEMONIC = auto()  # part of a mnemonic seen
     OPERAND = auto()
     SWALLOW = auto()  # inside a bad word, after its error was reported
-    SWALLOW_LETTER = auto()
+
+
+AXIS_LETTERS = frozenset(b"XYZTUVRSxyztuvrs")
 
 
 def _is_letter(b: int) -> bool:
@@ -90,21 +93,33 @@ def _is_letter(b: int) -> bool:
 
 
 class Lexer:
-    """Byte-at-a-time tokenizer. ``syntax(mnemonic)`` classifies upper-case mnemonics."""
+    """Byte-at-a-time tokenizer.
 
-    def __init__(self, syntax: Callable[[str], Syntax]) -> None:
+    ``syntax(mnemonic)`` classifies upper-case mnemonics. ``prefix(text)`` says whether ``text``
+    begins a longer mnemonic: the PCIx dialect has three-letter mnemonics (``ADH``), queries
+    (``?AC``, ``EG?``) and ``#WS``; the PC48 family has two-letter mnemonics only, none a prefix
+    of another, so without ``prefix`` a command is complete at its second letter.
+    """
+
+    def __init__(
+        self, syntax: Callable[[str], Syntax], prefix: Callable[[str], bool] | None = None
+    ) -> None:
         self._syntax = syntax
+        self._prefix = prefix or (lambda text: len(text) < 2 and text.isalpha())
         self.reset()
 
     def reset(self) -> None:
         self._state = _State.IDLE
-        self._first = 0
+        self._word = ""  # the mnemonic being read (upper case)
+        self._raw = bytearray()  # as received
+        self._swallowing = False
         self._mnemonic = ""
         self._text = bytearray()
         self._fields: list[str | None] = []
         self._field = bytearray()
         self._started = False
         self._skip_spaces = False
+        self._axis_first = False
         self._error: ErrorKind | None = None
 
     @property
@@ -123,59 +138,67 @@ class Lexer:
         state = self._state
         if state is _State.OPERAND:
             self._operand(b, out)
-        elif state is _State.LETTER:
-            self._letter(b, out)
-        elif state is _State.SWALLOW_LETTER:
-            self._swallow_letter(b, out)
+        elif state is _State.MNEMONIC:
+            self._more(b, out)
         elif state is _State.SWALLOW:
             if b in SEPARATORS:
                 self._state = _State.IDLE
-            elif _is_letter(b):
-                self._first = b
-                self._state = _State.SWALLOW_LETTER
+            elif self._starts_word(b):
+                self._begin_word(b, swallowing=True)
         else:
             self._idle(b, out)
+
+    def _starts_word(self, b: int) -> bool:
+        return _is_letter(b) or (b in (0x3F, 0x23) and self._prefix(chr(b)))  # ? #
+
+    def _begin_word(self, b: int, swallowing: bool) -> None:
+        self._word = chr(b).upper()
+        self._raw = bytearray([b])
+        self._swallowing = swallowing
+        self._state = _State.MNEMONIC
 
     def _idle(self, b: int, out: list[Token]) -> None:
         if b in SEPARATORS:
             return
-        if _is_letter(b):
-            self._first = b
-            self._state = _State.LETTER
+        if self._starts_word(b):
+            self._begin_word(b, swallowing=False)
             return
         out.append(Garbage(_printable(bytes([b])), ErrorKind.BAD_CHARACTER))
         self._state = _State.SWALLOW
 
-    def _letter(self, b: int, out: list[Token]) -> None:
-        pair = bytes([self._first, b])
-        if not _is_letter(b):
-            out.append(Garbage(_printable(pair), ErrorKind.UNKNOWN_COMMAND))
-            self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
+    def _more(self, b: int, out: list[Token]) -> None:
+        word = self._word
+        extends = _is_letter(b) or b == 0x3F  # a letter, or the ? of "EG?"
+        candidate = word + chr(b).upper() if extends else ""
+        if candidate and (self._syntax(candidate) is not Syntax.UNKNOWN or self._prefix(candidate)):
+            self._word = candidate
+            self._raw.append(b)
+            if self._syntax(candidate) is not Syntax.UNKNOWN and not self._prefix(candidate):
+                self._complete(candidate, out)
             return
-        mnemonic = pair.decode("ascii").upper()
-        syntax = self._syntax(mnemonic)
-        if syntax is Syntax.UNKNOWN:
-            out.append(Garbage(mnemonic, ErrorKind.UNKNOWN_COMMAND))
+        if self._syntax(word) is not Syntax.UNKNOWN:
+            # a complete mnemonic that could have been the start of a longer one, and is not
+            self._complete(word, out)
+            self._step(b, out)
+            return
+        if not self._swallowing:
+            text = bytes(self._raw) + (bytes([b]) if extends or len(self._raw) == 1 else b"")
+            kind = ErrorKind.UNKNOWN_COMMAND
+            out.append(Garbage(_printable(text).upper() if extends else _printable(text), kind))
+        if len(self._raw) == 1 or not extends:
+            self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
+        else:
             self._state = _State.SWALLOW
-        elif syntax is Syntax.BARE:
+            self._step(b, out)
+
+    def _complete(self, mnemonic: str, out: list[Token]) -> None:
+        syntax = self._syntax(mnemonic)
+        self._swallowing = False
+        if syntax is Syntax.BARE:
             out.append(Command(mnemonic, None, mnemonic))
             self._state = _State.IDLE
         else:
             self._begin_operand(mnemonic, syntax)
-
-    def _swallow_letter(self, b: int, out: list[Token]) -> None:
-        if _is_letter(b):
-            mnemonic = bytes([self._first, b]).decode("ascii").upper()
-            syntax = self._syntax(mnemonic)
-            if syntax is Syntax.BARE:
-                out.append(Command(mnemonic, None, mnemonic))
-                self._state = _State.IDLE
-            elif syntax is not Syntax.UNKNOWN:
-                self._begin_operand(mnemonic, syntax)
-            else:
-                self._state = _State.SWALLOW
-        else:
-            self._state = _State.IDLE if b in SEPARATORS else _State.SWALLOW
 
     def _begin_operand(self, mnemonic: str, syntax: Syntax) -> None:
         self._mnemonic = mnemonic
@@ -184,10 +207,18 @@ class Lexer:
         self._field = bytearray()
         self._started = False
         self._skip_spaces = syntax is Syntax.REQUIRED
+        self._axis_first = syntax is Syntax.AXIS
         self._error = None
         self._state = _State.OPERAND
 
     def _operand(self, b: int, out: list[Token]) -> None:
+        if self._axis_first:
+            self._axis_first = False
+            if b in AXIS_LETTERS:  # EGX…: the axis letter is the first field
+                self._field.append(b & 0xDF)
+                self._keep(b)
+                self._started = True
+                return
         if b in NUMBER_CHARS:
             if len(self._field) < MAX_FIELD:
                 self._field.append(b)
