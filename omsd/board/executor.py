@@ -472,7 +472,8 @@ class Executor:
         v = axis.to_motor(op.args[0])
         tick = self.board.clock.at_or_after(t)
         v0 = axis.velocity(tick)
-        axis.vl = abs(v)
+        if v:
+            axis.vl = abs(v)  # "This command modifies the move velocity parameter (VL)"; JG0 stops
         ramp = pf.velocity_change(v0, v, axis.ac)
         if v == 0.0:
             axis.begin(tick, ramp, Motion.STOP)

@@ -331,6 +331,8 @@ def _parabolic_ramp(vmax: float, accel: float, ratio: float) -> Poly:
 
 def ramp_up(vmax: float, accel: float, vbase: float, shape: RampShape) -> Piece:
     """The acceleration from rest to ``vmax`` (always positive)."""
+    if vmax <= 0.0:
+        return Poly(0.0, 0.0 if shape.kind is RampKind.COSINE else accel, 0.0, 0.0)
     if shape.kind is RampKind.COSINE:
         omega = 2.0 * accel / vmax
         return Cosine(0.0, vmax, omega, math.pi / omega)

@@ -871,3 +871,15 @@ def test_ten_minute_jog_is_simulated_fast():
     assert time.perf_counter() - start < 1.0
     assert h.position() == 6_000_000
     assert h.board.next_deadline() is None
+
+
+def test_jog_zero_stops_without_zeroing_vl_and_rc_stays_defined() -> None:
+    """Found by the command-soup property test: ``CN JF0 ... RC`` divided by zero."""
+    h = Harness("PC48-4")
+    h.send("CN AX JF0; RC")
+    h.send("VL5000 JG2000 ")
+    h.run(limit=1.0)
+    h.send("JG0 ")
+    h.run(limit=1.0)
+    assert h.axis("X").vl == 2000
+    assert h.query("RC") == b"\n\r0\n\r"
