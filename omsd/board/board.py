@@ -279,13 +279,18 @@ class Board:
 
     def reply_value(self, text: str, t: float) -> None:
         """ "surrounded by line feeds and carriage returns": ``<LF><CR>text<LF><CR>``."""
-        payload = text.encode("ascii")
-        self._output.append(Reply(t, b"\n\r" + payload + b"\n\r", payload))
+        self._framed(text, b"\n\r", t)
 
     def reply_status(self, text: str, t: float) -> None:
         """RA, QA, RI, QI, EA: "one line feed and two carriage returns on each end"."""
+        self._framed(text, b"\n\r\r", t)
+
+    def _framed(self, text: str, frame: bytes, t: float) -> None:
         payload = text.encode("ascii")
-        self._output.append(Reply(t, b"\n\r\r" + payload + b"\n\r\r", payload))
+        # PCIx / MAX family: text<LF><CR>, nothing before it
+        trailing = self.model.framing == "trailing"
+        data = payload + b"\n\r" if trailing else frame + payload + frame
+        self._output.append(Reply(t, data, payload))
 
     def command_error(self, kind: ErrorKind, command: str, t: float) -> None:
         """CMD_S (PC48 Table 3-8) and, with echo on, "an English readable error message"."""

@@ -130,6 +130,10 @@ class Model:
     serial: str = ""  # serial number, for a WY that reports one (VS4)
     vector_register: bool = False  # VME: the interrupt vector register (VS4 offset 9)
     irq_status_or: bool = False  # VS4: IRQ_S "is the logical OR of bits 4 through 6"
+    # Reply framing: "surround" = <LF><CR>text<LF><CR> (<LF><CR><CR> for axis status), the
+    # PC48/PC46/VS4 card; "trailing" = text<LF><CR>, as the PCIx and its MAX-family descendants
+    # present it on a serial or network link (shared/interop/README.md)
+    framing: str = "surround"
     aliases: tuple[str, ...] = field(default=())
 
     @property

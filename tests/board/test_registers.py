@@ -130,3 +130,16 @@ def test_command_error_event_names_the_command(pc48: Harness) -> None:
     (event,) = [e for e in pc48.events() if isinstance(e, CommandErrorEvent)]
     assert event.command == "VL0"
     assert event.kind.name == "OUT_OF_RANGE"
+
+
+def test_trailing_framing_for_the_pcix_dialect() -> None:
+    """The PCIx and the MAX family answer ``text<LF><CR>`` with nothing before (a leading
+    ``<LF><CR>`` reads as an empty reply to the omsMAXnet client)."""
+    from dataclasses import replace
+
+    from omsd.board.board import Board
+    from omsd.models import get_model
+
+    board = Board(replace(get_model("PC48-4"), framing="trailing"), 0.0)
+    board.receive(b"WY AX QA RP", 0.0)
+    assert board.take_bytes() == b"PC48 ver 3.00-4\n\rPNNN\n\r0\n\r"
