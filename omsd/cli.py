@@ -2,8 +2,9 @@
 
 ``omsd`` alone serves the built-in default (one PC48-4E on TCP 127.0.0.1:7048 and on a pty);
 ``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file; ``--config FILE``
-describes several. ``omsd models`` lists the personalities; ``omsd console`` talks to one
-board on this terminal without serving it.
+describes several. ``--state FILE`` keeps the boards' flash memory (AP defaults, permanent
+macros) across restarts, with either form. ``omsd models`` lists the personalities; ``omsd
+console`` talks to one board on this terminal without serving it.
 
 Exit status: 0 after a clean stop, 2 for a configuration error, 1 when the daemon cannot start
 (a port in use, a pty link that cannot be made). Errors are one line on standard error.
@@ -16,7 +17,14 @@ import asyncio
 import sys
 
 from omsd import __version__
-from omsd.config import DEFAULT_MODEL, VIEWS, ConfigError, from_options, load_config
+from omsd.config import (
+    DEFAULT_MODEL,
+    VIEWS,
+    ConfigError,
+    from_options,
+    load_config,
+    with_state_option,
+)
 from omsd.link import KINDS
 from omsd.models import MODELS, UnknownModel, get_model
 
@@ -54,6 +62,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--eos", metavar="HEX", help="driver end-of-string character, like E:XX (0A)")
     p.add_argument("--log", metavar="FILE", help="append the traffic to FILE as JSON lines")
     p.add_argument("--view", choices=VIEWS, help="traffic on standard error (default auto)")
+    p.add_argument(
+        "--state",
+        metavar="FILE",
+        help="keep the boards' flash (AP defaults, macros 5-24) in FILE across restarts",
+    )
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     sub.add_parser("models", help="list the board personalities")
     console = sub.add_parser("console", help="talk to one board on this terminal")
@@ -91,6 +104,7 @@ def _serve(args: argparse.Namespace) -> int:
             config = load_config(args.config)
         else:
             config = from_options(args.board, args.tcp, args.pty, args.link, args.eos, None)
+        config = with_state_option(config, args.state)
     except ConfigError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2

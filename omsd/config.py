@@ -8,6 +8,9 @@ world (``config/omsd.toml`` shows and explains every key)::
     file = "/var/log/omsd/traffic.jsonl"   # JSON-lines traffic log (relative: to this file)
     view = "auto"                          # auto | rich | plain | off
 
+    [state]
+    file = "/var/lib/omsd/omsd.state"      # the boards' flash memory (relative: to this file)
+
     [[board]]
     name = "xy-stage"          # [A-Za-z0-9_.-]+, default board1, board2, ...
     model = "PC48-4E"          # any personality of `omsd models`, case-insensitive
@@ -54,6 +57,10 @@ Choices where the issue is silent:
   given.
 * Encoder settings on an axis without an encoder are an error, as is a limit or home window that
   is empty (negative_limit >= positive_limit, home_low >= home_high).
+* The boards' flash memory (a PCIx's AP power-up defaults and permanent macros, "stored in
+  non-volatile flash RAM") is one state file for the whole daemon, ``[state] file``, with a
+  section per board name (:mod:`omsd.statefile`); ``--state FILE`` gives or overrides it. None
+  configured: flash lasts as long as the daemon runs. It may not be the traffic log's file.
 """
 
 from __future__ import annotations
@@ -68,7 +75,7 @@ import reprlib
 import tomllib
 import typing
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 
@@ -166,6 +173,7 @@ class DaemonConfig:
     boards: tuple[BoardConfig, ...]
     log: LogConfig = field(default_factory=LogConfig)
     source: str = "built-in default"  # "built-in default", "command line", or the file path
+    state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
 
 
 class ConfigError(Exception):
@@ -432,7 +440,8 @@ _BOARD_KEYS = (
 )
 _PTY_KEYS = ("link", "group", "mode")
 _LOG_KEYS = ("file", "view")
-_TOP_KEYS = ("log", "board")
+_STATE_KEYS = ("file",)
+_TOP_KEYS = ("log", "state", "board")
 _WORLD_FIELDS = typing.get_type_hints(AxisWorld)
 _WORLD_KEYS = tuple(f.name for f in fields(AxisWorld))
 _ENCODER_KEYS = ("encoder_counts_per_rev", "encoder_index")
@@ -680,6 +689,9 @@ def load_config(path: str | os.PathLike[str]) -> DaemonConfig:
 def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
     _table(document, at, _TOP_KEYS)
     log = _log(document.get("log", {}), at.key("log"), base)
+    state = _state(document.get("state", {}), at.key("state"), base)
+    if state is not None and state == log.file:
+        raise _not_the_log(at.key("state").key("file"), state)
     boards = document.get("board")
     if boards is None or boards == []:
         raise at.key("board").error("expected at least one [[board]] table, got none")
@@ -687,7 +699,7 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
         raise at.key("board").expected("an array of tables, [[board]]", boards)
     parsed = [_board(b, at.key("board").index(i), i, base) for i, b in enumerate(boards)]
     _check_unique(parsed)
-    return DaemonConfig(tuple(p.board for p in parsed), log, at.source)
+    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state)
 
 
 def _log(value: object, at: _At, base: Path) -> LogConfig:
@@ -695,6 +707,15 @@ def _log(value: object, at: _At, base: Path) -> LogConfig:
     file = _path(table["file"], at.key("file"), base) if "file" in table else None
     view = _choice(table.get("view", "auto"), VIEWS, at.key("view"))
     return LogConfig(file, view)
+
+
+def _state(value: object, at: _At, base: Path) -> Path | None:
+    table = _table(value, at, _STATE_KEYS)
+    return _path(table["file"], at.key("file"), base) if "file" in table else None
+
+
+def _not_the_log(at: _At, state: Path) -> ConfigError:
+    return at.error(f"expected a file other than the traffic log, got {str(state)!r}")
 
 
 # -- the command line ---------------------------------------------------------------------------
@@ -740,6 +761,18 @@ def from_options(
     return DaemonConfig((config,), LogConfig(file=log_file), "command line")
 
 
+def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
+    """``--state FILE`` on either form of the command line: the state file (relative to the
+    working directory), in place of a file's ``[state] file``. ``None``: the configuration as
+    it is."""
+    if state is None:
+        return config
+    path = _path(state, _At("--state"), Path.cwd())
+    if path == config.log.file:
+        raise _not_the_log(_At("--state"), path)
+    return replace(config, state=path)
+
+
 __all__ = [
     "DEFAULT_MODEL",
     "DEFAULT_TCP_PORT",
@@ -753,4 +786,5 @@ __all__ = [
     "default_pty_link",
     "from_options",
     "load_config",
+    "with_state_option",
 ]

@@ -10,11 +10,13 @@ from pathlib import Path
 
 import pytest
 
+from omsd import cli
 from omsd.board.world import AxisWorld, SwitchType
 from omsd.config import (
     DEFAULT_TCP_PORT,
     BoardConfig,
     ConfigError,
+    DaemonConfig,
     LogConfig,
     PtyEndpoint,
     TcpEndpoint,
@@ -22,6 +24,7 @@ from omsd.config import (
     default_pty_link,
     from_options,
     load_config,
+    with_state_option,
 )
 from omsd.models import MODELS
 
@@ -296,7 +299,7 @@ def test_empty_endpoint_list_is_allowed_beside_the_other_kind(tmp_path: Path) ->
 
 FILE_ERRORS = [
     # unknown keys anywhere, with the allowed ones
-    ("colour = 1\n" + MINIMAL, "colour: unknown key; expected one of log, board"),
+    ("colour = 1\n" + MINIMAL, "colour: unknown key; expected one of log, state, board"),
     (
         MINIMAL + "modle = 'PC48-4'\n",
         "board[0].modle: unknown key (did you mean 'model'?); expected one of name, model,",
@@ -749,3 +752,123 @@ def test_encoder_settings_follow_the_fitted_encoders(tmp_path: Path) -> None:
     )
     with pytest.raises(ConfigError, match="has no encoder on axis X"):
         load_config(path)
+
+
+# -- the state file (the boards' flash) ---------------------------------------------------------
+
+
+def test_no_state_file_unless_configured(tmp_path: Path) -> None:
+    assert default_config().state is None
+    assert load_config(write(tmp_path, MINIMAL)).state is None
+    assert load_config(write(tmp_path, "[state]\n" + MINIMAL)).state is None
+    assert from_options(None, ["7001"], [], None, None, None).state is None
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        ('"omsd.state"', "{dir}/omsd.state"),  # relative to the file's directory
+        ('"../lib/./omsd.state"', "{parent}/lib/omsd.state"),
+        ('"/var/lib/omsd/omsd.state"', "/var/lib/omsd/omsd.state"),
+        ('"~/omsd.state"', "{home}/omsd.state"),
+    ],
+)
+def test_state_file_in_a_file(tmp_path: Path, value: str, expected: str) -> None:
+    config = load_config(write(tmp_path, f"[state]\nfile = {value}\n" + MINIMAL))
+    where = expected.format(dir=tmp_path, parent=tmp_path.parent, home=Path.home())
+    assert config.state == Path(where)
+    assert config.state.is_absolute()
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ('state = "omsd.state"\n', "state: expected a table, got 'omsd.state'"),
+        ("[state]\nfile = 5\n", "state.file: expected a path, got 5"),
+        ('[state]\nfile = ""\n', "state.file: expected a path, got ''"),
+        (
+            '[state]\npath = "x"\n',
+            "state.path: unknown key; expected one of file",
+        ),
+        (
+            '[state]\nfiles = "x"\n',
+            "state.files: unknown key (did you mean 'file'?); expected one of file",
+        ),
+        (
+            '[log]\nfile = "same"\n[state]\nfile = "./same"\n',
+            "state.file: expected a file other than the traffic log, got '{dir}/same'",
+        ),
+    ],
+)
+def test_state_file_errors(tmp_path: Path, text: str, expected: str) -> None:
+    message = load_error(tmp_path, text + MINIMAL)
+    assert message == f"{tmp_path / 'omsd.toml'}: {expected.format(dir=tmp_path)}"
+
+
+def test_state_option(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """--state is relative to the working directory, and wins over the file's [state]."""
+    monkeypatch.chdir(tmp_path)
+    single = from_options(None, ["7001"], [], None, None, None)
+    assert with_state_option(single, None) is single
+    assert with_state_option(single, "omsd.state").state == tmp_path / "omsd.state"
+    configured = load_config(write(tmp_path, '[state]\nfile = "a.state"\n' + MINIMAL))
+    assert configured.state == tmp_path / "a.state"
+    assert with_state_option(configured, None).state == tmp_path / "a.state"
+    overridden = with_state_option(configured, "/var/lib/omsd/b.state")
+    assert overridden.state == Path("/var/lib/omsd/b.state")
+    assert overridden.boards == configured.boards and overridden.source == configured.source
+
+
+@pytest.mark.parametrize(
+    ("state", "log", "expected"),
+    [
+        ("", None, "--state: expected a path, got ''"),
+        ("t.jsonl", "t.jsonl", "--state: expected a file other than the traffic log, got '{dir}"),
+    ],
+)
+def test_state_option_errors(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, state: str, log: str | None, expected: str
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    config = from_options(None, ["7001"], [], None, None, log)
+    with pytest.raises(ConfigError) as info:
+        with_state_option(config, state)
+    assert str(info.value).startswith(expected.format(dir=tmp_path))
+
+
+def _serve(monkeypatch: pytest.MonkeyPatch, argv: list[str]) -> DaemonConfig:
+    """The configuration ``omsd ARGV`` would serve (the daemon is replaced by a stand-in)."""
+    from omsd import daemon
+
+    served: list[DaemonConfig] = []
+
+    class Daemon:
+        def __init__(self, config: DaemonConfig, log: object) -> None:
+            served.append(config)
+
+        async def run(self) -> None:
+            return None
+
+    monkeypatch.setattr(daemon, "Daemon", Daemon)
+    assert cli.main([*argv, "--view", "off"]) == 0
+    (config,) = served
+    return config
+
+
+def test_state_command_line_option_reaches_the_daemon(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert _serve(monkeypatch, ["--tcp", "0"]).state is None
+    assert _serve(monkeypatch, ["--tcp", "0", "--state", "s"]).state == tmp_path / "s"
+    path = write(tmp_path, '[state]\nfile = "f.state"\n' + MINIMAL)
+    assert _serve(monkeypatch, ["--config", str(path)]).state == tmp_path / "f.state"
+    config = _serve(monkeypatch, ["--config", str(path), "--state", "/x/o.state"])
+    assert config.state == Path("/x/o.state")
+
+
+def test_state_command_line_error_is_a_configuration_error(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert cli.main(["--tcp", "0", "--state", ""]) == 2
+    assert capsys.readouterr().err == "omsd: --state: expected a path, got ''\n"
