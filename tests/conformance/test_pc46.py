@@ -17,16 +17,16 @@ from __future__ import annotations
 import math
 import pathlib
 import re
-from collections.abc import Callable
 from fractions import Fraction
 
 import pytest
 
 from omsd.board.events import DoneEvent, ErrorKind
 from omsd.board.harness import Harness
-from omsd.board.world import AxisWorld
 from omsd.models import MODELS
 from omsd.models.pc46 import PC46_COMMANDS, PC46_COMMANDS_NO_CONTOUR
+
+from .support import errors, first_time, frame, quiet, status_frame
 
 DATASHEET = pathlib.Path(__file__).parents[3] / "shared" / "seeds" / "004_47955639fb93103e.txt"
 
@@ -53,25 +53,6 @@ _LISTED = (
 )
 DATASHEET_COMMANDS = _LISTED.split()
 
-NO_HOME = AxisWorld(home_low=5_000_000.0, home_high=5_000_100.0)
-
-
-def frame(text: str) -> bytes:
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status_frame(text: str) -> bytes:
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
-
-
-def errors(h: Harness) -> list[tuple[ErrorKind, str]]:
-    return [(e.kind, e.command.strip()) for e in h.errors()]
-
-
-def quiet(model: str) -> Harness:
-    """A board whose home switches are out of the way of every move here."""
-    return Harness(model, world={letter: NO_HOME for letter in PC46[model][0]})
-
 
 def tick_at_or_after(t: float | Fraction, rate: int) -> Fraction:
     return Fraction(math.ceil(Fraction(t) * rate), rate)
@@ -81,14 +62,6 @@ def trapezoid(distance: int, vl: int, ac: int) -> Fraction:
     """Duration of a linear-ramp move that reaches ``vl`` (PC48 §1.3)."""
     assert distance * ac >= vl * vl
     return Fraction(2 * vl, ac) + Fraction(distance * ac - vl * vl, ac * vl)
-
-
-def first_time(h: Harness, predicate: Callable[[], bool], step: float, limit: float) -> float:
-    end = h.t + limit
-    while not predicate():
-        assert h.t < end, "condition not reached in time"
-        h.advance(step)
-    return h.t
 
 
 # -- P1: X relative move, then Y absolute after X --------------------------------------------------

@@ -19,68 +19,28 @@ import math
 
 import pytest
 
-from omsd.board.events import CommandErrorEvent, DoneEvent, LimitEvent
+from omsd.board.events import CommandErrorEvent, LimitEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import CMD_S, INIT, OVRT
 from omsd.board.world import AxisWorld
 
+from .support import (
+    done_events,
+    end_tick,
+    enter,
+    linear_move_time,
+    number,
+    numbers,
+    soft_stop_bounds,
+    tick,
+)
+from .support import frame as value
+from .support import snapshot_physical as physical
+from .support import status_frame as status
+
 RATE = 2048  # PC48 sample ticks per second (§1.2, §8.2)
 AC0 = 1_000_000.0  # power-up acceleration
 VL0 = 100_000.0  # power-up velocity
-
-
-# -- helpers --------------------------------------------------------------------------------------
-
-
-def value(text: str) -> bytes:
-    """A reply "surrounded by line feeds and carriage returns"."""
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status(text: str) -> bytes:
-    """An RA/QA/RI/QI reply: one LF and two CRs on each end."""
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
-
-
-def tick(n: float) -> float:
-    return n / RATE
-
-
-def number(reply: bytes) -> int:
-    assert reply.startswith(b"\n\r") and reply.endswith(b"\n\r"), reply
-    return int(reply[2:-2])
-
-
-def numbers(reply: bytes) -> list[int]:
-    assert reply.startswith(b"\n\r") and reply.endswith(b"\n\r"), reply
-    return [int(f) for f in reply[2:-2].split(b",")]
-
-
-def linear_move_time(distance: float, vl: float = VL0, ac: float = AC0) -> float:
-    """§1.3 linear ramp: trapezoid, or triangle when the move is too short to reach VL."""
-    d = abs(distance)
-    if d >= vl * vl / ac:
-        return d / vl + vl / ac
-    return 2.0 * math.sqrt(d / ac)
-
-
-def end_tick(start_tick: int, duration: float) -> int:
-    """First sample tick at or after the analytic end of a move started on ``start_tick``."""
-    return math.ceil(start_tick + duration * RATE - 1e-9)
-
-
-def enter(h: Harness, text: str) -> bytes:
-    """Type an ``Enter:`` line: the text and the Enter key (CR). A command that may take an
-    operand (AF, LP, JG...) is complete only once its operand is terminated (§6.1)."""
-    return h.send(text + "\r")
-
-
-def physical(h: Harness, letter: str) -> float:
-    return h.board.snapshot(h.t)["axes"][letter]["physical"]
-
-
-def done_events(h: Harness) -> list[DoneEvent]:
-    return [e for e in h.events() if isinstance(e, DoneEvent)]
 
 
 # -- 6.4 axis specification -----------------------------------------------------------------------
@@ -395,14 +355,6 @@ def test_e15_at_ln_restores_t_limits() -> None:
     assert h.board.read_status_register(h.t) & OVRT
 
 
-def _soft_stop_bounds() -> tuple[float, float]:
-    """A linear MR10000 reaches 3000 at v = sqrt(2 * 3000 * AC); seen up to one tick later,
-    then decelerating at AC over v^2 / (2 AC)."""
-    v0 = math.sqrt(2 * 3000 * AC0)
-    v1 = v0 + AC0 / RATE
-    return 3000 + v0 * v0 / (2 * AC0), 3000 + v1 / RATE + v1 * v1 / (2 * AC0)
-
-
 def test_e16_ax_sl_ramps_down_at_limit_for_all_axes() -> None:
     """E16 ``AX SL``: at the +limit (3000) X ramps down at AC instead of stopping, ending near
     6000; the queue is not flushed ("except for the current move"), so the MR-1000 behind runs.
@@ -411,7 +363,7 @@ def test_e16_ax_sl_ramps_down_at_limit_for_all_axes() -> None:
     h = Harness("PC48-4", world=world)
     assert h.send("AX SL") == b""
     h.send("MR10000 GO MR-1000 GO AY MR10000 GO")
-    lo, hi = _soft_stop_bounds()
+    lo, hi = soft_stop_bounds(3000, AC0, RATE)
     h.until(0.3)  # both have ramped down by 0.078 + 0.078 s; X's MR-1000 is running
     y = number(h.query("AY RP"))
     assert lo - 1 <= y <= hi + 1, (y, lo, hi)

@@ -14,70 +14,26 @@ to full speed takes 0.1 s and 5,000 counts.
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable
 
-from omsd.board.axis import Motion
-from omsd.board.events import CommandErrorEvent, DoneEvent, LimitEvent, SlipEvent
+from omsd.board.events import CommandErrorEvent, LimitEvent, SlipEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import DON_S, ENC_S, OVRT
 from omsd.board.world import AxisWorld
 
+from .support import (
+    at,
+    done_events,
+    frame,
+    moving,
+    path_times,
+    physical,
+    quiet,
+    status_frame,
+    velocity,
+)
+
 TICK = 1.0 / 2048.0
-
-# A stage whose home switch is far from every move of these examples, so RA/QA/EA print N for
-# home unless a test wants otherwise (the default world has home at 1000..1100).
-NO_HOME = AxisWorld(home_low=5_000_000.0, home_high=5_000_100.0)
-
-
-def frame(text: str) -> bytes:
-    """ "surrounded by line feeds and carriage returns"."""
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status_frame(text: str) -> bytes:
-    """RA/QA/RI/QI/EA: one line feed and two carriage returns on each end."""
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
-
-
-def quiet(model: str, **worlds: AxisWorld) -> Harness:
-    """A board whose axes all have their home switch out of the way (unless given)."""
-    letters = {"2": "XY", "4": "XYZT", "6": "XYZTUV", "8": "XYZTUVRS"}[model.split("-")[1][0]]
-    world = {letter: worlds.get(letter, NO_HOME) for letter in letters}
-    return Harness(model, world=world)
-
-
-def moving(h: Harness, letter: str) -> bool:
-    return h.axis(letter).motion is not Motion.IDLE
-
-
-def velocity(h: Harness, letter: str) -> float:
-    return h.axis(letter).velocity(h.t)
-
-
-def physical(h: Harness, letter: str) -> float:
-    return h.axis(letter).phys(h.t)
-
-
-def at(h: Harness, t: float) -> bytes:
-    """Let time pass up to ``t`` (never backwards); return the replies produced meanwhile."""
-    assert t >= h.t - 1e-12, f"time would go backwards: {t} < {h.t}"
-    return h.until(t)
-
-
-def wait_for(h: Harness, predicate: Callable[[], bool], limit: float, step: float = TICK) -> float:
-    """Step the clock until ``predicate`` holds; return the time it first did."""
-    end = h.t + limit
-    while not predicate():
-        assert h.t < end, "condition not reached in time"
-        h.advance(step)
-    return h.t
-
-
-def done_events(events: list) -> list[DoneEvent]:  # type: ignore[type-arg]
-    return [e for e in events if isinstance(e, DoneEvent)]
-
 
 # -- §6.9 move termination ----------------------------------------------------------------------
 
@@ -1230,13 +1186,6 @@ HEXAGON = [(10_000, 0), (20_000, 0), (25_000, 10_000), (20_000, 20_000), (10_000
 HEXAGON += [(5000, 10_000), (10_000, 0)]
 
 
-def _hexagon_times(vertices: list[tuple[int, int]], lead: float, cv: float) -> list[float]:
-    times = [lead]
-    for (x0, y0), (x1, y1) in itertools.pairwise(vertices):
-        times.append(times[-1] + math.hypot(x1 - x0, y1 - y0) / cv)
-    return times
-
-
 def test_e109_mt_hexagon_with_bit9() -> None:
     """E109, the hexagon at CV5000 from (10000,0), with ``MT20000,2 0000`` read as the intended
     ``MT20000,20000`` (the hexagon's vertex; the literal text is tested below). The stage starts
@@ -1247,7 +1196,7 @@ def test_e109_mt_hexagon_with_bit9() -> None:
     text += "MT10000,20000\r\nMT5000,10000\r\nBH9\r\nMT10000,0\r\nCK\r\nCX\r\n"
     h.send(text)
     assert h.errors() == []
-    times = _hexagon_times(HEXAGON, 4.0, 5000.0)
+    times = path_times(HEXAGON, 4.0, 5000.0)
     at(h, 2.0)
     assert 0 < h.position("X") < 10_000
     bit9_low = []
@@ -1276,7 +1225,7 @@ def test_e109_mt_hexagon_verbatim_stray_space() -> None:
     assert len([e for e in h.events() if isinstance(e, CommandErrorEvent)]) == 1
     path = [(10_000, 0), (20_000, 0), (25_000, 10_000), (20_000, 2), (10_000, 20_000)]
     path += [(5000, 10_000), (10_000, 0)]
-    times = _hexagon_times(path, 4.0, 5000.0)
+    times = path_times(path, 4.0, 5000.0)
     at(h, times[3])
     assert abs(h.position("X") - 20_000) <= 3
     assert abs(h.position("Y") - 2) <= 3

@@ -32,16 +32,11 @@ from omsd.models import get_model, variant
 from omsd.models.pc48 import PC48_COMMANDS
 from omsd.models.vs4 import VS4_COMMANDS
 
+from .support import errors, frame, status_frame
+from .support import no_encoder_vs4 as vs4_without_encoders
+
 VS4_RATE = 1024
 PC48_RATE = 2048
-
-
-def frame(text: str) -> bytes:
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status_frame(text: str) -> bytes:
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
 
 
 def fields(reply: bytes) -> list[str]:
@@ -55,10 +50,6 @@ def rq(h: Harness) -> list[int]:
     out = fields(reply)
     assert all(f.isdigit() for f in out), reply
     return [int(f) for f in out]
-
-
-def errors(h: Harness) -> list[tuple[ErrorKind, str]]:
-    return [(e.kind, e.command.strip()) for e in h.errors()]
 
 
 def ramp(h: Harness, shape: str) -> None:
@@ -89,13 +80,6 @@ def cost(h: Harness, command: str) -> list[int]:
     before = rq(h)
     h.send(command)
     return [b - a for b, a in zip(before, rq(h), strict=True)]
-
-
-def vs4_without_encoders() -> Harness:
-    """A VS4-040 ordered without the encoder option (digest §8 item 13)."""
-    h = Harness("VS4-040")
-    h.board = Board(variant(get_model("VS4-040"), encoders=""), now=0.0)
-    return h
 
 
 # -- 7.1 hardware and host interface ---------------------------------------------------------------

@@ -18,15 +18,20 @@ file, not read back from the engine.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import pytest
 
-from omsd.board.board import Board
-from omsd.board.events import DoneEvent, LimitEvent
+from omsd.board.events import LimitEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import CMD_S, DON_S, INIT, OVRT
 from omsd.board.world import AxisWorld
-from omsd.models import get_model, variant
+
+from . import support
+from .support import done_events, enter, no_encoder_vs4, number, numbers, soft_stop_bounds
+from .support import frame as value
+from .support import snapshot_physical as physical
+from .support import status_frame as status
 
 RATE = 1024  # VS4 sample ticks per second (§1.2, §1.3)
 AC0 = 2_000_000.0  # power-up acceleration (AC)
@@ -37,55 +42,10 @@ QUEUE = 800  # "The maximum available space in each command queue is 800"
 # -- helpers --------------------------------------------------------------------------------------
 
 
-def value(text: str) -> bytes:
-    """A reply "surrounded by line feeds and carriage returns"."""
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status(text: str) -> bytes:
-    """An RA/QA/RI/QI reply: one line feed and two carriage returns on each end."""
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
-
-
-def tick(n: float) -> float:
-    return n / RATE
-
-
-def number(reply: bytes) -> int:
-    assert reply.startswith(b"\n\r") and reply.endswith(b"\n\r"), reply
-    return int(reply[2:-2])
-
-
-def numbers(reply: bytes) -> list[int]:
-    assert reply.startswith(b"\n\r") and reply.endswith(b"\n\r"), reply
-    return [int(f) for f in reply[2:-2].split(b",")]
-
-
-def linear_move_time(distance: float, vl: float = VL0, ac: float = AC0) -> float:
-    """§1.3 linear ramp: trapezoid, or triangle when the move is too short to reach VL."""
-    d = abs(distance)
-    if d >= vl * vl / ac:
-        return d / vl + vl / ac
-    return 2.0 * math.sqrt(d / ac)
-
-
-def end_tick(start_tick: int, duration: float) -> int:
-    """First sample tick at or after the analytic end of a move started on ``start_tick``."""
-    return math.ceil(start_tick + duration * RATE - 1e-9)
-
-
-def enter(h: Harness, text: str) -> bytes:
-    """Type an ``Enter:`` line: the text and the Enter key (CR). A command that may take an
-    operand (AF, LP, JG...) is complete only once its operand is terminated (§6.1)."""
-    return h.send(text + "\r")
-
-
-def physical(h: Harness, letter: str) -> float:
-    return h.board.snapshot(h.t)["axes"][letter]["physical"]
-
-
-def done_events(h: Harness) -> list[DoneEvent]:
-    return [e for e in h.events() if isinstance(e, DoneEvent)]
+# The shared helpers at the VS4's sample rate and power-up VL and AC.
+tick = partial(support.tick, rate=RATE)
+end_tick = partial(support.end_tick, rate=RATE)
+linear_move_time = partial(support.linear_move_time, vl=VL0, ac=AC0)
 
 
 def limit_events(h: Harness) -> list[tuple[str, int]]:
@@ -98,13 +58,6 @@ def hard_stop_bound(at: float, distance: float) -> float:
     v = math.sqrt(2 * at * AC0) + AC0 / RATE
     assert at <= distance / 2
     return at + v / RATE + 1
-
-
-def no_encoder_vs4() -> Harness:
-    """A VS4-040 ordered without the encoder option (MO is then valid)."""
-    h = Harness("VS4-040")
-    h.board = Board(variant(get_model("VS4-040"), encoders=""), now=0.0)
-    return h
 
 
 # -- 6.4 axis specification -----------------------------------------------------------------------
@@ -352,14 +305,6 @@ def test_e11_aa_ln_enables_t_limits_only() -> None:
     assert h.board.read_status_register(h.t) & OVRT
 
 
-def _soft_stop_bounds() -> tuple[float, float]:
-    """A linear MR10000 reaches 3000 at v = sqrt(2 * 3000 * AC); seen up to one tick later,
-    then decelerating at AC over v^2 / (2 AC)."""
-    v0 = math.sqrt(2 * 3000 * AC0)
-    v1 = v0 + AC0 / RATE
-    return 3000 + v0 * v0 / (2 * AC0), 3000 + v1 / RATE + v1 * v1 / (2 * AC0)
-
-
 def test_e12_ax_sl_ramps_down_at_limit_for_all_axes() -> None:
     """E12 ``AX SL``: at the +limit (3000) X ramps down at AC instead of stopping, ending near
     6000; the queue is not flushed ("except for the current move"), so the MR-1000 behind runs.
@@ -368,7 +313,7 @@ def test_e12_ax_sl_ramps_down_at_limit_for_all_axes() -> None:
     h = Harness("VS4-040", world=world)
     assert h.send("AX SL") == b""
     h.send("MR10000 GO MR-1000 GO AY MR10000 GO")
-    lo, hi = _soft_stop_bounds()
+    lo, hi = soft_stop_bounds(3000, AC0, RATE)
     h.until(0.3)  # both ramped down by 0.11 s; X's MR-1000 (0.045 s) is over
     y = number(h.query("AY RP"))
     assert lo - 1 <= y <= hi + 1, (y, lo, hi)

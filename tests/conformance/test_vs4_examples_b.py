@@ -16,43 +16,34 @@ an encoder on every axis (appendix C), so a single-axis GO takes 7 queue slots; 
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable
 
-from omsd.board.axis import Motion
 from omsd.board.board import Board
-from omsd.board.events import DoneEvent, LimitEvent, SlipEvent
+from omsd.board.events import LimitEvent, SlipEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import DON_S, ENC_S, INIT, OVRT
 from omsd.board.world import AxisWorld
 from omsd.models import get_model, variant
 
+from . import support
+from .support import (
+    NO_HOME,
+    at,
+    done_events,
+    frame,
+    moving,
+    path_times,
+    physical,
+    status_frame,
+    velocity,
+)
+
 TICK = 1.0 / 1024.0
-
-# A stage whose home switch is far from every move of these examples, so RA/QA/EA print N for
-# home unless a test wants otherwise (the default world has home at 1000..1100).
-NO_HOME = AxisWorld(home_low=5_000_000.0, home_high=5_000_100.0)
-
-
-def frame(text: str) -> bytes:
-    """ "surrounded by line feeds and carriage returns"."""
-    return b"\n\r" + text.encode("ascii") + b"\n\r"
-
-
-def status_frame(text: str) -> bytes:
-    """RA/QA/RI/QI/EA: "one line feed and two carriage returns on each end"."""
-    return b"\n\r\r" + text.encode("ascii") + b"\n\r\r"
-
-
-def axes_of(model: str) -> str:
-    return {"VS4-020": "XY", "VS4-040": "XYZT"}[model]
 
 
 def quiet(model: str = "VS4-040", **worlds: AxisWorld) -> Harness:
     """A board whose axes all have their home switch out of the way (unless given)."""
-    world = {letter: worlds.get(letter, NO_HOME) for letter in axes_of(model)}
-    return Harness(model, world=world)
+    return support.quiet(model, **worlds)
 
 
 def custom(
@@ -67,37 +58,6 @@ def custom(
     world = {letter: worlds.get(letter, NO_HOME) for letter in "XYZT"}
     h.board = Board(model, now=0.0, world=world)
     return h
-
-
-def moving(h: Harness, letter: str) -> bool:
-    return h.axis(letter).motion is not Motion.IDLE
-
-
-def velocity(h: Harness, letter: str) -> float:
-    return h.axis(letter).velocity(h.t)
-
-
-def physical(h: Harness, letter: str) -> float:
-    return h.axis(letter).phys(h.t)
-
-
-def at(h: Harness, t: float) -> bytes:
-    """Let time pass up to ``t`` (never backwards); return the replies produced meanwhile."""
-    assert t >= h.t - 1e-12, f"time would go backwards: {t} < {h.t}"
-    return h.until(t)
-
-
-def wait_for(h: Harness, predicate: Callable[[], bool], limit: float, step: float = TICK) -> float:
-    """Step the clock until ``predicate`` holds; return the time it first did."""
-    end = h.t + limit
-    while not predicate():
-        assert h.t < end, "condition not reached in time"
-        h.advance(step)
-    return h.t
-
-
-def done_events(events: list) -> list[DoneEvent]:  # type: ignore[type-arg]
-    return [e for e in events if isinstance(e, DoneEvent)]
 
 
 def ticks_after(seconds: float) -> float:
@@ -1328,13 +1288,6 @@ HEXAGON = [(10_000, 0), (20_000, 0), (25_000, 10_000), (20_000, 20_000), (10_000
 HEXAGON += [(5000, 10_000), (10_000, 0)]
 
 
-def _path_times(vertices: list[tuple[int, int]], lead: float, cv: float) -> list[float]:
-    times = [lead]
-    for (x0, y0), (x1, y1) in itertools.pairwise(vertices):
-        times.append(times[-1] + math.hypot(x1 - x0, y1 - y0) / cv)
-    return times
-
-
 def test_e102_mt_hexagon_with_bit9() -> None:
     """E102, the hexagon at CV5000 from (10000,0), sent as printed (leading spaces included; the
     VS4 prints ``MT20000,20000`` without the PC48's stray space). The stage starts at (0,0): the
@@ -1351,7 +1304,7 @@ def test_e102_mt_hexagon_with_bit9() -> None:
     tail = ["MT10000,20000", "MT5000,10000", "BH9", "MT10000,0", "CK", "CX"]
     h.send("".join(f"                 {line}\r\n" for line in tail))
     assert h.errors() == []
-    times = _path_times(HEXAGON, 4.0, 5000.0)
+    times = path_times(HEXAGON, 4.0, 5000.0)
     at(h, 2.0)
     assert 0 < h.position("X") < 10_000
     bit9_low = []
