@@ -58,7 +58,8 @@ def load_error(tmp_path: Path, text: str) -> str:
     return message
 
 
-def option_error(**options: object) -> str:
+def options(**given: object) -> dict[str, object]:
+    """from_options' arguments: nothing given on the command line, except ``given``."""
     args: dict[str, object] = {
         "board": None,
         "tcp": [],
@@ -67,25 +68,20 @@ def option_error(**options: object) -> str:
         "eos": None,
         "log": None,
     }
-    args.update(options)
+    args.update(given)
+    return args
+
+
+def option_error(**given: object) -> str:
     with pytest.raises(ConfigError) as info:
-        from_options(**args)  # type: ignore[arg-type]
+        from_options(**options(**given))  # type: ignore[arg-type]
     message = str(info.value)
     assert "\n" not in message
     return message
 
 
-def board(**options: object) -> BoardConfig:
-    args: dict[str, object] = {
-        "board": None,
-        "tcp": [],
-        "pty": [],
-        "link": None,
-        "eos": None,
-        "log": None,
-    }
-    args.update(options)
-    config = from_options(**args)  # type: ignore[arg-type]
+def board(**given: object) -> BoardConfig:
+    config = from_options(**options(**given))  # type: ignore[arg-type]
     assert config.source == "command line"
     (only,) = config.boards
     return only

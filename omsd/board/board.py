@@ -148,9 +148,6 @@ class Board:
         """Reply bytes only, events dropped: what a raw data port would show."""
         return b"".join(o.data for o in self.take_output() if isinstance(o, Reply))
 
-    def pending_output(self) -> bool:
-        return bool(self._output)
-
     # -- time -----------------------------------------------------------------------------------
 
     def advance(self, now: float) -> None:
