@@ -99,6 +99,7 @@ class Axis:
         self.vl = float(model.default_velocity)
         self.ac = float(model.default_acceleration)
         self.vb = 0.0
+        self.ramp = pf.LINEAR
         self.uu: Decimal | None = None
         self.ratio = 1.0  # encoder counts per motor count (ER)
         self.hv = 0.0

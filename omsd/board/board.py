@@ -75,6 +75,17 @@ class Board:
 
     # -- power ----------------------------------------------------------------------------------
 
+    @property
+    def ramp(self) -> pf.RampShape:
+        """The ramp of the first axis; PF, PN and CN set every axis's (PCIx LA, PR, SC, SR and
+        SS set one axis's)."""
+        return self.axes[0].ramp
+
+    @ramp.setter
+    def ramp(self, shape: pf.RampShape) -> None:
+        for axis in self.axes:
+            axis.ramp = shape
+
     def _power_up(self, t: float) -> None:
         self.ramp = pf.LINEAR
         self.soft_limits = False

@@ -721,9 +721,9 @@ def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
         a = abs(axis.acceleration(t))
         if a > 0.0 or axis.velocity(t) == 0.0:
             return a
-        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, ix.board.ramp)
+        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
         return abs(up.a(up.duration))
-    up = pf.ramp_up(axis.vl, axis.ac, axis.vb, ix.board.ramp)
+    up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
     return abs(up.a(0.0))
 
 

@@ -431,13 +431,12 @@ class Executor:
                 linear.append(axis)
         if linear:
             self._interpolate(linear, targets, tick)
-        ramp = self.board.ramp
         for axis in axes:
             if axis.index not in targets:
                 continue
             target = targets[axis.index]
             distance = target - axis.position(tick)
-            pieces = pf.move_pieces(distance, axis.vl, axis.ac, axis.vb, ramp)
+            pieces = pf.move_pieces(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
             if distance:
                 axis.direction = 1 if distance > 0 else -1
             axis.begin(tick, pieces, Motion.MOVE, final=target)
@@ -453,12 +452,11 @@ class Executor:
         """ML/MT: "The velocity and acceleration parameters are scaled to allow the axes to move
         and finish together. All axes are scaled to the axis with the longest move time." The
         scaled values are left in the VL and AC registers, as the manual warns."""
-        ramp = self.board.ramp
         dist = {a.index: abs(targets[a.index] - a.position(t)) for a in axes}
         moving = [a for a in axes if dist[a.index] > 0]
         if not moving:
             return
-        lead = max(moving, key=lambda a: pf.move_time(dist[a.index], a.vl, a.ac, a.vb, ramp))
+        lead = max(moving, key=lambda a: pf.move_time(dist[a.index], a.vl, a.ac, a.vb, a.ramp))
         for a in moving:
             k = dist[a.index] / dist[lead.index]
             a.vl = lead.vl * k

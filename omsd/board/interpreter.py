@@ -268,7 +268,16 @@ class Interpreter:
     # -- queueing -------------------------------------------------------------------------------
 
     def cost(self, cell: Cell, axis: Axis, contour_axes: int = 0) -> int:
-        return cell.cost(self.board.ramp.kind.value, self.board.model.encoder_option, contour_axes)
+        model = self.board.model
+        feedback = axis.has_encoder if model.dialect == "pcix" else model.encoder_option
+        return cell.cost(
+            axis.ramp.kind.value,
+            feedback,
+            contour_axes,
+            segments=axis.ramp.segments,
+            pa=axis.pa is not None,
+            settle=axis.se_ms > 0,
+        )
 
     def enqueue(self, items: list[tuple[Axis, Op]]) -> None:
         """Place ops in their axis queues, all or nothing; :class:`Blocked` if any queue is

@@ -300,14 +300,37 @@ class RampKind(Enum):
     LINEAR = "linear"
     PARABOLIC = "parabolic"
     COSINE = "cosine"
+    CUSTOM = "custom"  # PCIx SR#: a DAR/DAB/DAE table
+    SCURVE = "scurve"  # PCIx SS#: an AJ profile
+
+
+@dataclass(frozen=True, slots=True)
+class SCurve:
+    """An AJ profile (PCIx §5.8.3): fractions of AC where the acceleration starts (ALOWER) and
+    peaks (APEAK), the stretch factor (ARADIUS), and the same for deceleration."""
+
+    alower: float = 0.0
+    apeak: float = 0.0
+    aradius: float = 1.0
+    dlower: float = 0.0
+    dpeak: float = 0.0
+    dradius: float = 1.0
 
 
 @dataclass(frozen=True, slots=True)
 class RampShape:
-    """The board-wide ramp selection: PF (linear), PN# (parabolic, # steps) or CN (cosine)."""
+    """An axis's ramp selection: PF/LA (linear), PN#/PR# (parabolic, # steps), CN/SC (cosine),
+    SR# (custom table: ``breakpoints`` of (fraction of AC, fraction of VL)), SS# (S-curve)."""
 
     kind: RampKind = RampKind.LINEAR
     steps: int = 3
+    table: int = 0  # SR# / SS#
+    breakpoints: tuple[tuple[float, float], ...] = ()
+    scurve: SCurve | None = None
+
+    @property
+    def segments(self) -> int:
+        return len(self.breakpoints)
 
     @property
     def ratio(self) -> float:

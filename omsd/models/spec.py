@@ -14,7 +14,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
 
-RAMP_COLUMNS = ("linear", "parabolic", "cosine")  # the LINEAR / PARABOLIC / COSINE columns
+# the LINEAR / PARABOLIC / COSINE columns of the PC48 family's tables, and the PCIx's further
+# CUSTOM (SR) and S-CURVE (AJ/SS) columns
+RAMP_COLUMNS = ("linear", "parabolic", "cosine", "custom", "scurve")
 
 
 class Kind(Enum):
@@ -24,24 +26,50 @@ class Kind(Enum):
     FLUSH = "flush"  # "Flush + n": flush the queue(s), then queue n slots
 
 
+Row = tuple[int, int, int, int, int]
+_ZERO: Row = (0, 0, 0, 0, 0)
+
+
 @dataclass(frozen=True)
 class Cell:
     kind: Kind
-    # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER; ramp in RAMP_COLUMNS order
-    slots: tuple[tuple[int, int, int], tuple[int, int, int]] = ((0, 0, 0), (0, 0, 0))
+    # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER (PCIx: "If the axis is a
+    # stepper and encoder or servo axis add ..."); ramp in RAMP_COLUMNS order
+    slots: tuple[Row, Row] = (_ZERO, _ZERO)
     per_axis: int = 0  # extra slots per contour axis ("4 + number of axes")
+    per_segment: int = 0  # custom ramps: "6 + 2 x segments", "3 + (No. of ramp segments + 12)"
+    pa: int = 0  # PCIx: "If PA (power automatic) mode is active add ..."
+    settle: int = 0  # PCIx: "If an auxiliary output bit settle time has been specified add ..."
 
-    def cost(self, ramp: str, encoder: bool, axes: int = 0) -> int:
-        """Slots for ramp column ``ramp`` ("linear", "parabolic", "cosine")."""
+    def cost(
+        self,
+        ramp: str,
+        encoder: bool,
+        axes: int = 0,
+        segments: int = 0,
+        pa: bool = False,
+        settle: bool = False,
+    ) -> int:
+        """Slots for ramp column ``ramp`` (one of :data:`RAMP_COLUMNS`)."""
         col = RAMP_COLUMNS.index(ramp)
-        return self.slots[1 if encoder else 0][col] + self.per_axis * axes
+        n = self.slots[1 if encoder else 0][col] + self.per_axis * axes
+        if ramp == "custom":
+            n += self.per_segment * segments
+        return n + (self.pa if pa else 0) + (self.settle if settle else 0)
 
     def __add__(self, other: Cell) -> Cell:
         rows = tuple(
             tuple(a + b for a, b in zip(r1, r2, strict=True))
             for r1, r2 in zip(self.slots, other.slots, strict=True)
         )
-        return Cell(self.kind, rows, self.per_axis + other.per_axis)  # type: ignore[arg-type]
+        return Cell(
+            self.kind,
+            rows,  # type: ignore[arg-type]
+            self.per_axis + other.per_axis,
+            self.per_segment + other.per_segment,
+            self.pa + other.pa,
+            self.settle + other.settle,
+        )
 
 
 NV = Cell(Kind.NOT_VALID)
@@ -50,26 +78,40 @@ IMM = Cell(Kind.IMMEDIATE)
 
 def q(n: int) -> Cell:
     """A fixed number of slots."""
-    return Cell(Kind.QUEUED, ((n, n, n), (n, n, n)))
+    return Cell(Kind.QUEUED, ((n,) * 5, (n,) * 5))
 
 
-def qr(linear: int, parabolic: int, cosine: int) -> Cell:
-    """Slots by ramp type (LINEAR / PARABOLIC / COSINE columns)."""
-    row = (linear, parabolic, cosine)
+def qr(
+    linear: int, parabolic: int, cosine: int, custom: int | None = None, scurve: int | None = None
+) -> Cell:
+    """Slots by ramp type (LINEAR / PARABOLIC / COSINE, and the PCIx's CUSTOM / S-CURVE)."""
+    row = (
+        linear,
+        parabolic,
+        cosine,
+        parabolic if custom is None else custom,
+        parabolic if scurve is None else scurve,
+    )
     return Cell(Kind.QUEUED, (row, row))
 
 
 def qe(no_encoder: int, encoder: int) -> Cell:
     """Slots by encoder option (NO ENCODER / ENCODER columns)."""
-    return Cell(Kind.QUEUED, ((no_encoder,) * 3, (encoder,) * 3))
+    return Cell(Kind.QUEUED, ((no_encoder,) * 5, (encoder,) * 5))
 
 
 def flush(n: int) -> Cell:
-    return Cell(Kind.FLUSH, ((n, n, n), (n, n, n)))
+    return Cell(Kind.FLUSH, ((n,) * 5, (n,) * 5))
 
 
 def per_axis(base: int, each: int) -> Cell:
-    return Cell(Kind.QUEUED, ((base,) * 3, (base,) * 3), each)
+    return Cell(Kind.QUEUED, ((base,) * 5, (base,) * 5), each)
+
+
+def addons(encoder: int = 0, pa: int = 0, settle: int = 0, segments: int = 0) -> Cell:
+    """The PCIx's ``*`` add-ons, to be added to a base cell: ``q(5) + addons(encoder=3, pa=2,
+    settle=3)`` is GO's "5*" with "+3 enc/servo, +2 PA, +3 settle"."""
+    return Cell(Kind.QUEUED, (_ZERO, (encoder,) * 5), 0, segments, pa, settle)
 
 
 @dataclass(frozen=True)
@@ -135,6 +177,17 @@ class Model:
     # present it on a serial or network link (shared/interop/README.md)
     framing: str = "surround"
     aliases: tuple[str, ...] = field(default=())
+    # "oms": the PC48/PC46/VS4 language; "pcix": the PCIx's (2- and 3-letter mnemonics, ?XX
+    # queries answered ``xx<value>``, macros, flash defaults, servo axes)
+    dialect: str = "oms"
+    servo_axes: str = ""  # PCIx: axes closed by the PID loop (a subset of encoder_axes)
+    # PCIx: answer the MAX-family queries EPICS omsMAXnet sends (PS? LT? CL? QL PP PE #WS),
+    # an extension beyond the PCIx manual that a board's config can switch off
+    max_queries: bool = False
+    io_inputs: int = 0  # PCIx: factory input bits (RB 0 bits), the rest of io_bits outputs
+
+    def is_servo(self, axis: str) -> bool:
+        return axis in self.servo_axes
 
     @property
     def encoder_option(self) -> bool:

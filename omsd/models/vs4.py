@@ -39,12 +39,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 from omsd.models.pc48 import PC48_COMMANDS
-from omsd.models.spec import IMM, NV, Cell, CommandSpec, Kind, Model, q, qe
+from omsd.models.spec import IMM, NV, Cell, CommandSpec, Model, q, qe, qr
 
 
 def _bits() -> Cell:
     # BL/BH in AA/AM: 2 slots with PF, 3 with PN or CN ("pf / pn,cn / custom")
-    return Cell(Kind.QUEUED, ((2, 3, 3), (2, 3, 3)))
+    return qr(2, 3, 3)
 
 
 def _vs4_commands() -> dict[str, CommandSpec]:
