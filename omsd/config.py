@@ -149,10 +149,13 @@ class BoardConfig:
     encoders: str | None = None  # axes fitted with encoders, if not the model's (VS4 option)
     serial: str | None = None  # serial number WY reports (VS4), if not the model's
     firmware: str | None = None  # firmware revision WY reports, if not the model's
+    max_queries: bool | None = None  # PCIx: answer the MAX-family queries (default on)
 
     def personality(self) -> Model:
         """The model as fitted and labelled on this board."""
-        return variant(get_model(self.model), self.encoders, self.serial, self.firmware)
+        return variant(
+            get_model(self.model), self.encoders, self.serial, self.firmware, self.max_queries
+        )
 
     def __post_init__(self) -> None:
         # Frozen all the way down, whatever the caller passed.
@@ -437,6 +440,7 @@ _BOARD_KEYS = (
     "encoders",
     "serial",
     "firmware",
+    "max_queries",
 )
 _PTY_KEYS = ("link", "group", "mode")
 _LOG_KEYS = ("file", "view")
@@ -584,7 +588,14 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
     encoders = _encoders(table.get("encoders"), at.key("encoders"), model)
     serial = _label(table.get("serial"), at.key("serial"), r"[A-Za-z0-9-]{1,16}", "a serial number")
     firmware = _label(table.get("firmware"), at.key("firmware"), r"\d{1,2}\.\d{2}", "a version")
-    model = variant(model, encoders, serial, firmware)
+    max_queries = None
+    if "max_queries" in table:
+        if model.dialect != "pcix":
+            raise at.key("max_queries").error(
+                f"is a PCIx setting; a {model.name} speaks no MAX-family dialect"
+            )
+        max_queries = _boolean(table["max_queries"], at.key("max_queries"), "true or false")
+    model = variant(model, encoders, serial, firmware, max_queries)
     world = _worlds(table.get("axes", {}), at.key("axes"), model)
     inputs = _inputs(table.get("inputs", {}), at.key("inputs"), model)
     board = BoardConfig(
@@ -601,6 +612,7 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
         encoders=encoders,
         serial=serial,
         firmware=firmware,
+        max_queries=max_queries,
     )
     return _Parsed(board, at, tcp, pty)
 

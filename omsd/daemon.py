@@ -9,15 +9,18 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import copy
 import os
 import signal
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, TextIO
 
 from omsd import sdnotify
 from omsd.config import DaemonConfig
 from omsd.service import BoardService
+from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport.pty import PtyEndpoint
 from omsd.transport.tcp import serve_tcp
@@ -25,6 +28,47 @@ from omsd.transport.tcp import serve_tcp
 
 class StartupError(Exception):
     """A board could not be brought up (a port in use, a pty link that cannot be made)."""
+
+
+class FlashSaver:
+    """Writes the boards' flash (PCIx AP, ADH, ADL, PT) to the state file off the event loop,
+    one save after another in the order the boards wrote, so a slow disk never delays a board
+    and the file always ends with the last write. A failed save is logged (one line); the
+    board goes on with the new values in memory."""
+
+    def __init__(self, state: StateFile, log: TrafficLog) -> None:
+        self.state = state
+        self.log = log
+        self._last: asyncio.Task[None] | None = None
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    def writer(self, name: str) -> Callable[[dict[str, Any] | None, dict[int, str]], None]:
+        def write(defaults: dict[str, Any] | None, macros: dict[int, str]) -> None:
+            self._queue(name, BoardFlash(copy.deepcopy(defaults), dict(macros)))
+
+        return write
+
+    def _queue(self, name: str, flash: BoardFlash) -> None:
+        previous = self._last
+
+        async def save() -> None:
+            if previous is not None:
+                with contextlib.suppress(BaseException):
+                    await asyncio.shield(previous)
+            try:
+                await asyncio.to_thread(self.state.save_board, name, flash)
+            except (StateFileError, ValueError, TypeError) as exc:
+                self.log.error(str(exc))
+
+        task = asyncio.get_running_loop().create_task(save())
+        self._last = task
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def drain(self) -> None:
+        """Wait for every save asked for so far."""
+        while self._tasks:
+            await asyncio.gather(*list(self._tasks), return_exceptions=True)
 
 
 @dataclass(frozen=True)
@@ -49,14 +93,18 @@ class Daemon:
         self.ptys: list[PtyEndpoint] = []
         self.endpoints: list[Endpoint] = []
         self._stop = asyncio.Event()
+        self.saver: FlashSaver | None = None
 
     async def start(self) -> list[Endpoint]:
         loop = asyncio.get_running_loop()
         loop.set_exception_handler(self._loop_error)
+        state = self._load_state()
         try:
             for board in self.config.boards:
                 service = BoardService(board, loop, self.log)
                 self.services.append(service)
+                if state is not None and self.saver is not None:
+                    self._attach_flash(service, state, self.saver)
                 for tcp in board.tcp:
                     try:
                         server, host, port = await serve_tcp(
@@ -93,6 +141,29 @@ class Daemon:
             await self.stop(quiet=True)
             raise
         return self.endpoints
+
+    def _load_state(self) -> StateFile | None:
+        """The boards' flash: "a corrupt or missing state file gives the factory defaults and
+        one clear log line"."""
+        if self.config.state is None:
+            return None
+        state = StateFile(self.config.state)
+        result = state.load()
+        if result.message is not None:
+            (self.log.info if result.ok else self.log.warning)(result.message)
+        self.saver = FlashSaver(state, self.log)
+        return state
+
+    @staticmethod
+    def _attach_flash(service: BoardService, state: StateFile, saver: FlashSaver) -> None:
+        board = service.board
+        if service.model.dialect != "pcix":
+            return  # the older boards keep nothing in flash
+        flash = state.board(service.name)
+        board.flash_defaults = flash.defaults
+        board.flash_macros = dict(flash.macros)
+        board.load_flash()
+        board.flash_writer = saver.writer(service.name)
 
     def _announce(self, endpoint: Endpoint) -> None:
         self.endpoints.append(endpoint)
@@ -137,6 +208,8 @@ class Daemon:
                 await asyncio.wait_for(server.wait_closed(), timeout=2.0)
         for service in self.services:
             service.close()
+        if self.saver is not None:
+            await self.saver.drain()
         self.servers.clear()
         self.ptys.clear()
         self.services.clear()

@@ -165,12 +165,30 @@ def test_example_lab_setup_shows_every_key() -> None:
     for key in keys:
         assert re.search(rf"\b{key} = ", code), key
     config = load_config(CONFIG_DIR / "omsd.toml")
-    xy, slits, crate = config.boards
+    xy, slits, crate, servo = config.boards
     assert xy.world["X"].home_switch is SwitchType.NORMALLY_CLOSED
     assert xy.pty[0].group == "dialout" and xy.pty[0].mode == 0o660
     assert slits.model == "PC48-8" and slits.eos == 0x0D and slits.buffer_size == 0x800
     assert crate.personality().who_are_you() == "VS4-040 ver 1.04 S/N 000217"
     assert crate.personality().encoder_axes == "XY"
+    assert servo.personality().who_are_you() == (
+        "PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems"
+    )
+    assert servo.personality().max_queries
+    assert config.state == Path("/var/lib/omsd/omsd.state")
+
+
+def test_max_queries_is_a_pcix_setting(tmp_path: Path) -> None:
+    """``max_queries`` switches the MAX-family extension of a PCIx; on another board it is an
+    error (the key means nothing there)."""
+    good = tmp_path / "good.toml"
+    good.write_text('[[board]]\nmodel = "PCIX-004"\ntcp = 7100\nmax_queries = false\n')
+    (board,) = load_config(good).boards
+    assert board.personality().max_queries is False
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[board]]\nmodel = "PC48-4"\ntcp = 7100\nmax_queries = false\n')
+    with pytest.raises(ConfigError, match="max_queries"):
+        load_config(bad)
 
 
 def test_example_epics_board_is_a_pc48_4_on_the_raw_link() -> None:

@@ -24,10 +24,16 @@ from typing import TYPE_CHECKING
 from omsd.board import profiles as pf
 from omsd.board.profiles import Trajectory
 from omsd.board.queue import CommandQueue, SyncGroup
+from omsd.board.servo import ServoLoop
 from omsd.board.world import AxisWorld, SwitchType
 
 if TYPE_CHECKING:
     from omsd.board.board import Board
+    from omsd.board.pcix_motion import Gear
+
+#: How often a moving (or settling) servo axis is looked at for a runaway following error:
+#: every 32 samples of the 2048-per-second loop, 15.6 ms.
+SERVO_CHECK = 1.0 / 64
 
 
 class Motion(Enum):
@@ -40,6 +46,7 @@ class Motion(Enum):
     STREAM = auto()
     CONTOUR = auto()
     HOLD = auto()  # position-hold correction
+    GEAR = auto()  # PCIx EG/TX: following a master axis (omsd.board.pcix_motion)
 
 
 @dataclass
@@ -51,6 +58,7 @@ class Wait:
     group: SyncGroup | None = None
     round: int = 0
     bit: int = 0
+    high: bool = True  # "input": the level waited for (SW high, PCIx BW low)
     then: Callable[[float], None] | None = None  # run when the wait is over
     jump: int | None = None  # program index to go on from (a loop pass), else the next op
 
@@ -80,6 +88,14 @@ class Axis:
         self.letter = letter
         self.world = world
         self.has_encoder = board.model.has_encoder(letter)
+        self.is_servo = board.model.is_servo(letter)
+        # PCIx servo axis: the PID loop and motor (omsd.board.servo); the trajectory is the
+        # commanded position, the loop's motor the actual one (RE, EA)
+        self.servo: ServoLoop | None = (
+            ServoLoop(rate=board.model.sample_rate, origin=board.clock.origin)
+            if self.is_servo
+            else None
+        )
         self.done_bit = 1 << board.model.done_bits[index]
         self.queue = CommandQueue(board.model.queue_size)
         self.phys_offset = world.start_position
@@ -96,28 +112,41 @@ class Axis:
         self.traj = Trajectory.at_rest(t, 0.0)
         self.motion = Motion.IDLE
         self.phys_offset = phys if self.stall_phys is None else self.stall_phys
-        self.vl = float(model.default_velocity)
-        self.ac = float(model.default_acceleration)
-        self.vb = 0.0
+        self.vl: float = float(model.default_velocity)
+        self.ac: float = float(model.default_acceleration)
+        self.vb: float = 0.0
         self.ramp = pf.LINEAR
+        # PCIx parameters (the older boards never change them)
+        self.dc: float = 200_000.0  # DC: "defaults to 200,000"
+        self.backlash: int = 0  # BC
+        self.aux_default_high: bool = True  # ADH / ADL
+        self.direction_inverted: bool = False  # DBI / DBN
+        self.limit_high: bool = False  # LH / LL
+        self.slip_kill: bool = False  # TN / TF
+        # PCIx motion state (omsd.board.pcix_motion); inert on the older boards
+        self.gear: Gear | None = None  # EG / TX: the axis this one follows
+        self.travel_limits: tuple[float, float] | None = None  # TL (lower, upper); TL0,0: None
+        self.backlash_dir: int | None = None  # direction BC last took the backlash up in
+        self.setpoint_offset = 0.0  # BC on a servo: set point beyond the commanded position
+        self.contour_origin: float | None = None  # where a running contour's own pieces begin
         self.uu: Decimal | None = None
         self.ratio = 1.0  # encoder counts per motor count (ER)
-        self.hv = 0.0
-        self.hg = 1.0
-        self.hd = 0.0
-        self.es = 0.0
-        self.limits_on = True
-        self.home_high = False
-        self.home_encoder = False
+        self.hv: float = 0.0
+        self.hg: float = 1.0
+        self.hd: float = 0.0
+        self.es: float = 0.0
+        self.limits_on: bool = True
+        self.home_high: bool = False
+        self.home_encoder: bool = False
         self.hold = False
         self.slip_detect = False
         self.tracking = False
         self.done = False
         self.slipped = False
         self.direction = 1
-        self.aux = True
+        self.aux: bool = True
         self.pa: bool | None = None  # aux state during a move in PA mode
-        self.se_ms = 0
+        self.se_ms: int = 0
         self.aux_timer: float | None = None
         self.in_arm: tuple[float, SyncGroup] | None = None
         self.in_fire: float | None = None
@@ -131,6 +160,9 @@ class Axis:
         self.in_position = True
         self.outputs: list[tuple[float, tuple[str, int, bool]]] = []  # contour I/O actions
         self.queue.flush()
+        if self.servo is not None:  # HF: "the default mode at power up or reset"
+            self.servo_sync(t)
+            self.servo.closed = False
         self.enc_base = 0.0
         self.enc_phys = phys
         self.track_enc = 0.0
@@ -141,6 +173,31 @@ class Axis:
 
     def position(self, t: float) -> float:
         return self.traj.position(t)
+
+    # -- servo --------------------------------------------------------------------------------
+
+    def servo_sync(self, t: float) -> None:
+        """Run the servo loop up to ``t`` against the commanded trajectory."""
+        loop = self.servo
+        if loop is None or t <= loop.time:
+            return
+        offset = self.setpoint_offset  # PCIx BC on a servo axis
+        if self.motion is Motion.IDLE and self.traj.end_time <= loop.time:
+            loop.run(self.traj.position(t) + offset, t)
+        elif offset:
+            traj = self.traj
+            loop.run(lambda s: traj.position(s) + offset, t, traj.velocity, traj.acceleration)
+        else:
+            loop.run(self.traj.position, t, self.traj.velocity, self.traj.acceleration)
+
+    def servo_check_time(self) -> float | None:
+        """When the loop must next be looked at for a runaway (while it has work to do)."""
+        loop = self.servo
+        if loop is None or not loop.closed:
+            return None
+        if self.motion is Motion.IDLE and loop.at_rest(0.25):
+            return None
+        return loop.time + SERVO_CHECK
 
     def counter(self, t: float) -> int:
         """The position register: whole steps emitted so far."""
@@ -164,6 +221,7 @@ class Axis:
 
     def load_counter(self, t: float, value: float) -> None:
         """Set the position register to ``value`` at ``t`` without moving the carriage."""
+        self.servo_sync(t)
         x = self.traj.position(t)
         self.phys_offset += x - value
         self.traj = _rebased(self.traj, t, value - x)
@@ -172,10 +230,16 @@ class Axis:
     # -- encoder ------------------------------------------------------------------------------
 
     def encoder(self, t: float) -> int:
+        if self.servo is not None:
+            self.servo_sync(t)
+            return self.servo.encoder_counts
         return math.floor(self.enc_base + self.ratio * (self.phys(t) - self.enc_phys) + 0.5)
 
     def anchor_encoder(self, t: float, value: float | None = None) -> None:
         """Re-anchor the encoder model at ``t`` (LP loads ``value``; ER keeps the count)."""
+        if self.servo is not None and value is not None:
+            self.servo_sync(t)
+            self.servo.set_position(value)
         self.enc_base = float(self.encoder(t)) if value is None else value
         self.enc_phys = self.phys(t)
         self.anchor_tracking(t)
@@ -197,6 +261,11 @@ class Axis:
     # -- switches -----------------------------------------------------------------------------
 
     def limit_active(self, direction: int, t: float) -> bool:
+        if self.travel_limits is not None:  # PCIx TL: "flag a limit condition just as it would"
+            from omsd.board.pcix_motion import beyond_travel_limit
+
+            if beyond_travel_limit(self, direction, t):
+                return True
         forced = self.board.world.forced_limit(self.index, direction)
         if forced is not None:
             return forced
@@ -253,6 +322,7 @@ class Axis:
         velocity). Until ``t`` the axis goes on as it was: asking for the position between now
         and the tick must not show the future."""
         now = min(self.board.now, t)
+        self.servo_sync(now)
         prefix = _segment(self.traj, now, t) if t > now else []
         moving_before = any(p.v(0.0) != 0.0 or p.a(0.0) != 0.0 for p in prefix)
         x_now = self.traj.position(now)
@@ -269,6 +339,14 @@ class Axis:
                 self.in_position = False
         self.sensor_check = t
         self.invalidate()
+        self._moved(now, t, motion)
+
+    def _moved(self, now: float, start: float | None = None, motion: Motion | None = None) -> None:
+        """The trajectory was replaced at ``now``: PCIx gearing and NV (omsd.board.pcix_motion)."""
+        if self.board.model.dialect == "pcix":
+            from omsd.board.pcix_motion import moved
+
+            moved(self, now, start, motion)
 
     def _note_direction(self, t: float) -> None:
         """Remember the direction the axis was last moving in (RA/QA character 4)."""
@@ -290,20 +368,24 @@ class Axis:
 
     def settle(self, t: float) -> None:
         """Come to rest on the whole step the counter shows (end of motion)."""
+        self.servo_sync(t)
         self._note_direction(t)
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
         self.invalidate()
+        self._moved(t)
 
     def halt(self, t: float) -> None:
         """Stop pulses at once (KL, hard limit, KM/KR at home)."""
+        self.servo_sync(t)
         self._note_direction(t)
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(_steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
         self.home = None
         self.invalidate()
+        self._moved(t)
 
     def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
         """Ramp down to rest at AC (ST, SA, soft limit, after home)."""
@@ -334,6 +416,7 @@ class Axis:
             (self.in_fire, "in"),
             (self.aux_timer, "aux"),
             (self.outputs[0][0] if self.outputs else None, "output"),
+            (self.servo_check_time(), "servo"),
         ]
         if self.wait is not None and self.wait.until is not None:
             candidates.append((self.wait.until, "wait"))
@@ -341,6 +424,10 @@ class Axis:
             candidates.append((self._next_crossing(), "sensor"))
         if self.slip_detect and self.stall_phys is not None and self.motion is not Motion.IDLE:
             candidates.append((self._slip_crossing(), "sensor"))
+        if self.backlash and self.motion is not Motion.IDLE:  # PCIx BC: a direction change
+            from omsd.board.pcix_motion import backlash_tick
+
+            candidates.append((backlash_tick(self), "sensor"))
         for when, what in candidates:
             if when is not None and when < best[0]:
                 best = (when, what)
@@ -357,6 +444,10 @@ class Axis:
                 levels.append((w.positive_limit, True))
             if p > w.negative_limit:
                 levels.append((w.negative_limit, False))
+            if self.travel_limits is not None:  # PCIx TL
+                from omsd.board.pcix_motion import travel_levels
+
+                levels.extend(travel_levels(self, t))
         if self.home is not None:
             if self.home.index_points:
                 for point in self.home.index_points:
@@ -373,7 +464,7 @@ class Axis:
     def _first_tick(self, level_counter: float, above: bool, t_from: float) -> float | None:
         clock = self.board.clock
         when = self.traj.first_time(level_counter, above, t_from)
-        while when is not None:
+        while when is not None and math.isfinite(when):
             tick = clock.at_or_after(when)
             if tick <= t_from:
                 tick = clock.after(t_from)
@@ -381,7 +472,7 @@ class Axis:
             if (x >= level_counter) if above else (x <= level_counter):
                 return tick
             nxt = self.traj.first_time(level_counter, above, tick)
-            if nxt is None or nxt <= when:
+            if nxt is None or not math.isfinite(nxt) or nxt <= when:
                 return None if nxt is None else clock.after(tick)
             when = nxt
         return None

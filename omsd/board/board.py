@@ -22,7 +22,7 @@ a ten-minute move in microseconds::
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 from omsd.board import profiles as pf
@@ -61,6 +61,14 @@ class Board:
         world: Mapping[str, AxisWorld] | Sequence[AxisWorld] | None = None,
     ) -> None:
         self.model = model
+        # PCIx flash: saved power-up defaults (None: never archived) and the permanent macros;
+        # ``flash_writer`` (set by whoever keeps them, e.g. the daemon's state file) is called
+        # with both after every write (AP, ADH, ADL, PT)
+        self.flash_defaults: dict[str, Any] | None = None
+        self.flash_macros: dict[int, str] = {}
+        self.flash_writer: Callable[[dict[str, Any] | None, dict[int, str]], None] | None = None
+        self.ramp_tables: dict[int, list[tuple[float, float]]] = {}  # PCIx DAR/DAB/DAE
+        self.scurves: dict[int, pf.SCurve] = {}  # PCIx AJ
         self.clock = SampleClock(model.sample_rate, now)
         self.now = now
         self.world = WorldState()
@@ -98,6 +106,28 @@ class Board:
         self.registers.status = 0
         self.init_until: float | None = None
         self.interpreter.reset()
+        if self.model.dialect == "pcix":
+            self.load_flash()
+
+    def load_flash(self) -> None:
+        """PCIx power-up and RD: the saved defaults over the factory values, and the permanent
+        macros."""
+        from omsd.board import flash
+
+        flash.factory(self)
+        if self.flash_defaults is not None:
+            flash.apply(self, self.flash_defaults)
+        for axis in self.axes:
+            axis.aux = axis.aux_default_high
+        self.interpreter.macros.load_permanent(self.flash_macros)
+
+    def write_flash(self, defaults: dict[str, Any] | None = None) -> None:
+        """AP / ADH / ADL (``defaults`` given) and PT: write flash and hand it to the keeper."""
+        if defaults is not None:
+            self.flash_defaults = defaults
+        self.flash_macros = self.interpreter.macros.permanent()
+        if self.flash_writer is not None:
+            self.flash_writer(self.flash_defaults, dict(self.flash_macros))
 
     def reset(self, t: float) -> None:
         """RS (PC48 §6.5): "All previously entered data and commands are lost. All internal
@@ -209,6 +239,8 @@ class Board:
                     ex.on_aux_timer(axis, t)
                 elif kind == "output":
                     ex.on_outputs(axis, t)
+                elif kind == "servo":
+                    ex.on_servo(axis, t)
                 elif kind == "wait" and not ex.step(axis, t):
                     if axis.wait is not None:
                         axis.wait.until = None

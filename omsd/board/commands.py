@@ -392,30 +392,34 @@ def _vs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 # -- 6.9 move termination -------------------------------------------------------------------------
 
 
-def _stop(ix: Interpreter, axes: list[Axis], t: float, kill: bool = False) -> None:
+def _stop(
+    ix: Interpreter, axes: list[Axis], t: float, kill: bool = False, cell: Cell | None = None
+) -> None:
     board = ix.board
     for axis in axes:
         board.executor.flush(axis, t)
     for axis in axes:
-        axis.queue.append(Op("STOP", (kill,), 2))
+        # "Flush + 2" (PC48); the PCIx's tables give their own numbers (+PA, +settle)
+        slots = ix.cost(cell, axis) if cell is not None and cell.kind is Kind.FLUSH else 2
+        axis.queue.append(Op("STOP", (kill,), slots))
     ix.mt_blocked = False
 
 
 @handles("ST")
 def _st(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "When executed in the AA mode, the ST command is equivalent to the SA command."
-    _stop(ix, ix.context_axes(), t)
+    _stop(ix, ix.context_axes(), t, cell=cell)
 
 
 @handles("SA")
 def _sa(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    _stop(ix, list(ix.board.axes), t)
+    _stop(ix, list(ix.board.axes), t, cell=cell)
 
 
 @handles("SD")
 def _sd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.board.clear_done(ix.board.axes)
-    _stop(ix, list(ix.board.axes), t)
+    _stop(ix, list(ix.board.axes), t, cell=cell)
 
 
 @handles("KL")

@@ -56,6 +56,16 @@ class SlipEvent:
 
 
 @dataclass(frozen=True, slots=True)
+class ServoTripEvent:
+    """A servo axis's following error passed the runaway limit and its loop opened (PCIx
+    §2.7.2). ``error`` is the following error, counts."""
+
+    time: float
+    axis: str
+    error: float
+
+
+@dataclass(frozen=True, slots=True)
 class CommandErrorEvent:
     """The command-error flag CMD_S was set."""
 
@@ -72,11 +82,12 @@ __all__ = [
     "LimitEvent",
     "Output",
     "Reply",
+    "ServoTripEvent",
     "SlipEvent",
     "describe",
 ]
 
-Event = DoneEvent | LimitEvent | SlipEvent | CommandErrorEvent
+Event = DoneEvent | LimitEvent | SlipEvent | ServoTripEvent | CommandErrorEvent
 Output = Reply | Event
 
 
@@ -88,4 +99,6 @@ def describe(event: Event) -> str:
         return f"limit {event.axis}{'+' if event.direction > 0 else '-'}"
     if isinstance(event, SlipEvent):
         return f"slip {event.axis}"
+    if isinstance(event, ServoTripEvent):
+        return f"servo {event.axis} tripped (following error {event.error:.0f})"
     return f"command error: {event.kind.message}: {event.command}"

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis, HomeSearch, Motion, Pending, Wait
-from omsd.board.events import LimitEvent, SlipEvent
+from omsd.board.events import LimitEvent, ServoTripEvent, SlipEvent
 from omsd.board.queue import LoopFrame, Op, SyncGroup
 from omsd.board.registers import DON_S, ENC_S, OVRT
 
@@ -37,6 +37,27 @@ class Executor:
         self._ops: dict[str, Callable[[Axis, Op, float], Result]] = {
             name[4:]: getattr(self, name) for name in dir(self) if name.startswith("_op_")
         }
+
+    def _op_SET(self, axis: Axis, op: Op, t: float) -> Result:
+        """A queued parameter change: ``Op("SET", (mnemonic, apply), slots)`` runs
+        ``apply(axis, t)`` when the axis reaches it (PCIx KP, DZ, BC, DBI, LH ...)."""
+        apply = op.args[1]
+        apply(axis, t)
+        return None
+
+    def on_servo(self, axis: Axis, t: float) -> None:
+        """A look at a servo axis's loop: "if the error is greater than 32768 then the
+        controller will disable the PID so that you don't have a runaway motor" (PCIx
+        §2.7.2). The loop opens (HF); the commanded motion stops at once and the axis's queue is
+        flushed, as a limit does, so that nothing drives an axis nobody is holding."""
+        loop = axis.servo
+        assert loop is not None
+        axis.servo_sync(t)
+        if loop.tripped and axis.motion is not Motion.IDLE:
+            axis.halt(t)
+            self.flush(axis, t)
+            self.board.emit(ServoTripEvent(t, axis.letter, loop.following_error))
+        axis.invalidate()
 
     # -- the queue ----------------------------------------------------------------------------
 
@@ -95,7 +116,7 @@ class Executor:
             assert w.group is not None
             return w.group.released(w.round)
         if w.kind == "input":
-            return self.board.input_high(w.bit, t)
+            return self.board.input_high(w.bit, t) == w.high
         if w.kind == "inpos":
             return axis.in_position and axis.motion is Motion.IDLE
         raise AssertionError(w.kind)
@@ -126,7 +147,7 @@ class Executor:
         if op.code == "WT":
             return Wait("time", until=op.group.data["until"] if op.group else t)
         if op.code == "SW":
-            return None if self.board.input_high(op.args[0], t) else Wait("input", bit=op.args[0])
+            return self._op_SW(axis, op, t, grouped=False)
         if op.code in ("WD", "WG"):
             assert op.group is not None
             return self._loop_end(axis, op.group.data["again"], t)
@@ -162,6 +183,9 @@ class Executor:
 
     def _op_AC(self, axis: Axis, op: Op, t: float) -> Result:
         axis.ac = axis.to_motor(op.args[0])
+        # PCIx DC: "The deceleration rate ... will take on whatever value is entered via the AC
+        # command"
+        axis.dc = axis.ac
         return None
 
     def _op_VB(self, axis: Axis, op: Op, t: float) -> Result:
@@ -249,11 +273,30 @@ class Executor:
         return None
 
     def _op_HF(self, axis: Axis, op: Op, t: float) -> Result:
+        if axis.servo is not None:
+            # "HF will open the loop and turn off the PID"
+            axis.servo_sync(t)
+            axis.servo.closed = False
+            axis.invalidate()
+            if axis.motion is Motion.JOG:  # HF stops a servo JG (PCIx JG)
+                axis.decelerate(t)
+            return None
         self.hold_off(axis)
         axis.tracking = False
         return None
 
     def _op_HN(self, axis: Axis, op: Op, t: float) -> Result:
+        if axis.servo is not None:
+            # "HN ... will close the loop and enable the PID". Closing is bumpless: an axis at
+            # rest is commanded to hold where its motor is (an open loop may have drifted)
+            loop = axis.servo
+            axis.servo_sync(t)
+            if not loop.closed and axis.motion is Motion.IDLE:
+                axis.load_counter(t, float(loop.encoder_counts))
+                loop.set_position(loop.position)
+            loop.closed = True
+            axis.invalidate()
+            return None
         if not axis.hold:
             axis.hold = True
             x = axis.traj.final if axis.traj.is_finite else axis.position(t)
@@ -672,12 +715,15 @@ class Executor:
     def _op_WA(self, axis: Axis, op: Op, t: float) -> Result:
         return self.arrive(axis, op, t)
 
-    def _op_SW(self, axis: Axis, op: Op, t: float) -> Result:
-        if op.group is not None:
+    def _op_SW(self, axis: Axis, op: Op, t: float, grouped: bool = True) -> Result:
+        # SW: until the input is high; PCIx BW (args (bit, False)): "waits for the input line
+        # to reach a TTL low rather than a TTL high"
+        if grouped and op.group is not None:
             return self.arrive(axis, op, t)
-        if self.board.input_high(op.args[0], t):
+        high = op.args[1] if len(op.args) > 1 else True
+        if self.board.input_high(op.args[0], t) == high:
             return None
-        return Wait("input", bit=op.args[0])
+        return Wait("input", bit=op.args[0], high=high)
 
     def _op_CX(self, axis: Axis, op: Op, t: float) -> Result:
         return self.arrive(axis, op, t)
@@ -746,6 +792,10 @@ class Executor:
             axis.slipped = True
             board.registers.status |= ENC_S | DON_S
             board.emit(SlipEvent(t, axis.letter))
+            if axis.slip_kill:
+                # PCIx TN: "the axis will be killed as though a KL command had been issued"
+                axis.halt(t)
+                self.flush(axis, t)
         if axis.hold and axis.motion is Motion.IDLE:
             self.check_hold(axis, t)
 

@@ -19,8 +19,10 @@ from dataclasses import dataclass
 from decimal import Decimal
 from typing import TYPE_CHECKING
 
+from omsd.board import dialect
 from omsd.board.contour import ContourDefinition
 from omsd.board.events import ErrorKind
+from omsd.board.macros import MacroCapture, MacroStore
 from omsd.models.spec import Cell, CommandSpec, Kind
 from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
 from omsd.protocol.operands import OperandError, check_range, parse_number, truncate
@@ -31,12 +33,31 @@ if TYPE_CHECKING:
     from omsd.board.queue import Op
 
 MAX_LOOP_DEPTH = 4
+MAX_MACRO_DEPTH = 8
 
 
 def _syntax(spec: CommandSpec) -> Syntax:
+    if spec.letter_operand:
+        return Syntax.AXIS
+    if spec.hex_operand:
+        return Syntax.HEX
     if not spec.operand:
         return Syntax.BARE
     return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
+
+
+def _motor_fits(motor: str, axis: Axis) -> bool:
+    """PCIx: the motor types a command applies to (servo, stepper with encoder, open loop)."""
+    servo = axis.is_servo
+    if motor == "servo":
+        return servo
+    if motor == "feedback":
+        return axis.has_encoder
+    if motor == "stepper_encoder":
+        return axis.has_encoder and not servo
+    if motor == "open_loop":
+        return not axis.has_encoder
+    raise ValueError(motor)
 
 
 class CommandFailed(Exception):
@@ -60,11 +81,19 @@ class Interpreter:
         self.board = board
         self.buffer: deque[int] = deque()
         self.capacity = board.model.input_buffer
-        commands = board.model.commands
-        self._syntax = {m: _syntax(spec) for m, spec in commands.items()}
-        self.lexer = Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN))
-        self.pending: deque[Token] = deque()
+        self.commands = dialect.commands(board.model)
+        self.handlers = dialect.handlers(board.model)
+        self._syntax = {m: _syntax(spec) for m, spec in self.commands.items()}
+        self.lexer = self._lexer()
+        self.pending: deque[tuple[Token, int]] = deque()  # with the macro depth it came from
+        self.macros = MacroStore()
         self.reset()
+
+    def _lexer(self) -> Lexer:
+        if self.board.model.dialect == "pcix":
+            starts = dialect.prefixes(self.commands)
+            return Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN), starts.__contains__)
+        return Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN))
 
     def reset(self) -> None:
         """RS and power-up: interpreter state to defaults (the input buffer is kept)."""
@@ -81,6 +110,11 @@ class Interpreter:
         self.pa_entered: list[bool] = [False] * n
         self.se_entered: list[bool] = [False] * n
         self.ws_bits: dict[int, list[int]] = {}
+        self.capture: MacroCapture | None = None  # PCIx MD: characters go to a macro
+        self.depth = 0
+        self.table: int | None = None  # PCIx DAR#: a custom ramp table being defined
+        self.table_points: list[tuple[float, float]] = []
+        self.macros.reset()
         self.lexer.reset()
 
     # -- input ----------------------------------------------------------------------------------
@@ -96,6 +130,7 @@ class Interpreter:
         self.pending.clear()
         self.lexer.reset()
         self.wq = None
+        self.capture = None
 
     def control_d(self, t: float) -> None:
         """Control-D: "the same functions as the KL command. It bypasses the command
@@ -126,9 +161,10 @@ class Interpreter:
                 self.wq = None
                 progressed = True
             if self.pending:
-                token = self.pending.popleft()
+                token, depth = self.pending.popleft()
+                self.depth = depth
                 if not self._dispatch(token, t):
-                    self.pending.appendleft(token)
+                    self.pending.appendleft((token, depth))
                     return progressed
                 for axis in board.axes:
                     board.executor.step(axis, t)
@@ -139,8 +175,34 @@ class Interpreter:
             b = self.buffer.popleft()
             if self.echo:
                 board.reply(bytes([b]), t)
-            self.pending.extend(self.lexer.feed(b))
             progressed = True
+            if self.capture is not None:
+                self._capture(b, t)
+                continue
+            self.pending.extend((token, 0) for token in self.lexer.feed(b))
+
+    def _capture(self, b: int, t: float) -> None:
+        """PCIx MD: "Enter the commands ... then enter a control Z to end the macro definition.
+        The control Z may be ASCII value 26 or the string “^Z”"."""
+        capture = self.capture
+        assert capture is not None
+        if not capture.feed(b):
+            return
+        self.capture = None
+        if not self.macros.define(capture.slot, capture.text):
+            self.board.command_error(ErrorKind.MACRO_TOO_LONG, f"MD{capture.slot}", t)
+
+    def run_macro(self, text: bytes) -> None:
+        """MX: the macro's commands run next, before anything received after MX. A macro that
+        runs macros is followed :data:`MAX_MACRO_DEPTH` deep (a macro calling itself would
+        otherwise never give the host back its board)."""
+        if self.depth >= MAX_MACRO_DEPTH:
+            raise CommandFailed(ErrorKind.MACRO_TOO_DEEP)
+        lexer = self._lexer()
+        tokens: list[Token] = []
+        for b in text + b";":
+            tokens.extend(lexer.feed(b))
+        self.pending.extendleft((token, self.depth + 1) for token in reversed(tokens))
 
     def _dispatch(self, token: Token, t: float) -> bool:
         """Execute one token; False if it must wait for queue space."""
@@ -156,13 +218,17 @@ class Interpreter:
         return True
 
     def _command(self, cmd: Command, t: float) -> None:
-        from omsd.board.commands import HANDLERS
-
         model = self.board.model
-        spec = model.commands[cmd.mnemonic]
+        spec = self.commands[cmd.mnemonic]
         cell = spec.cell(self.column)
         if cell.kind is Kind.NOT_VALID:
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        if self.table is not None and cmd.mnemonic not in ("DAB", "DAE"):
+            # PCIx DAR: "only the DAB and DAE commands will be valid" until DAE
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        single = self.mode == "single" and self.contour is None
+        if spec.motor is not None and single and not _motor_fits(spec.motor, self.axis):
+            raise CommandFailed(ErrorKind.WRONG_MOTOR)
         if spec.encoder_only:
             if self.mode == "single" and self.contour is None:
                 if not self.axis.has_encoder:
@@ -177,7 +243,10 @@ class Interpreter:
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
         if cmd.error is not None:
             raise CommandFailed(cmd.error)
-        HANDLERS[cmd.mnemonic](self, cmd, cell, t)
+        handler = self.handlers.get(cmd.mnemonic)
+        if handler is None:  # a table row without behaviour must not take the board down
+            raise CommandFailed(ErrorKind.UNKNOWN_COMMAND)
+        handler(self, cmd, cell, t)
 
     # -- context --------------------------------------------------------------------------------
 

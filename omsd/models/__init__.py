@@ -7,10 +7,13 @@ from dataclasses import replace
 
 from omsd.models.pc46 import PC46_MODELS
 from omsd.models.pc48 import PC48_MODELS
+from omsd.models.pcix import PCIX_MODELS
 from omsd.models.spec import CommandSpec, Model
 from omsd.models.vs4 import VS4_MODELS
 
-MODELS: dict[str, Model] = {m.name: m for m in (*PC48_MODELS, *PC46_MODELS, *VS4_MODELS)}
+MODELS: dict[str, Model] = {
+    m.name: m for m in (*PC48_MODELS, *PC46_MODELS, *VS4_MODELS, *PCIX_MODELS)
+}
 
 
 class UnknownModel(KeyError):
@@ -32,6 +35,7 @@ def variant(
     encoders: str | None = None,
     serial: str | None = None,
     firmware: str | None = None,
+    max_queries: bool | None = None,
 ) -> Model:
     """The same product as fitted and labelled in one installation: which axes have encoders
     (``""`` for none; a VS4 may be ordered without), the serial number WY reports, the firmware
@@ -45,6 +49,8 @@ def variant(
         model = replace(model, serial=serial)
     if firmware is not None:
         model = replace(model, firmware=firmware)
+    if max_queries is not None:
+        model = replace(model, max_queries=max_queries and model.dialect == "pcix")
     return model
 
 

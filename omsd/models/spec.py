@@ -129,6 +129,12 @@ class CommandSpec:
     not_on_encoder_models: bool = False  # MO
     single_axes: str | None = None  # VS: "You must be in the AX mode"
     other_axes_ignored: bool = False  # VS4 VS: "AY - AT Ignored" rather than "Not valid"
+    letter_operand: bool = False  # PCIx EG: the operand starts with an axis letter (EGX1,2;)
+    hex_operand: bool = False  # PCIx BS: a hexadecimal mask
+    # PCIx: the motor types a single-axis command applies to (the manual's lost icons, read from
+    # the prose): None = every axis; "servo" = servo axes; "feedback" = servo or stepper with
+    # encoder; "stepper_encoder" = stepper with encoder only; "open_loop" = open-loop stepper only
+    motor: str | None = None
 
     def cell(self, mode: str) -> Cell:
         if mode == "single":

@@ -27,6 +27,13 @@ class ErrorKind(Enum):
     CIRCULAR_AXES = "Circular interpolation needs a 2 axis contour"
     CONTOUR_FULL = "Contour queue full"
     OVERLONG = "Input too long"
+    WRONG_MOTOR = "Not valid for this axis's motor type"
+    MACRO_TOO_LONG = "Macro longer than 250 characters"
+    MACRO_TOO_DEEP = "Macros nested too deep"
+    NO_MACRO = "Macro not defined"
+    NO_TABLE = "Ramp table not defined"
+    TABLE_FULL = "Ramp table full"
+    GEARED = "Axis is geared"
 
     @property
     def message(self) -> str:

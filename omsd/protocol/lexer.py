@@ -41,6 +41,7 @@ MAX_TEXT = 48
 
 SEPARATORS = frozenset(b" \t\r\n;")
 NUMBER_CHARS = frozenset(b"0123456789+-.")
+HEX_CHARS = frozenset(b"0123456789abcdefABCDEF")
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,6 +77,7 @@ class Syntax(Enum):
     OPTIONAL = auto()  # may be followed by an operand; a space ends it
     REQUIRED = auto()  # expects an operand; spaces before it are skipped
     AXIS = auto()  # expects an operand that starts with an axis letter (PCIx EGX2,1;)
+    HEX = auto()  # expects a hexadecimal operand (PCIx BS: "00 ≤ Hex number ≤ FF")
 
 
 class _State(Enum):
@@ -120,6 +122,7 @@ class Lexer:
         self._started = False
         self._skip_spaces = False
         self._axis_first = False
+        self._digits = NUMBER_CHARS
         self._error: ErrorKind | None = None
 
     @property
@@ -208,6 +211,7 @@ class Lexer:
         self._started = False
         self._skip_spaces = syntax is Syntax.REQUIRED
         self._axis_first = syntax is Syntax.AXIS
+        self._digits = HEX_CHARS if syntax is Syntax.HEX else NUMBER_CHARS
         self._error = None
         self._state = _State.OPERAND
 
@@ -219,7 +223,7 @@ class Lexer:
                 self._keep(b)
                 self._started = True
                 return
-        if b in NUMBER_CHARS:
+        if b in self._digits:
             if len(self._field) < MAX_FIELD:
                 self._field.append(b)
             else:

@@ -15,7 +15,7 @@ import random
 import tracemalloc
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from omsd.board.board import Board
@@ -24,6 +24,7 @@ from omsd.board.harness import Harness
 from omsd.board.registers import CMD_S, DON_S
 from omsd.models import get_model
 from omsd.models.pc48 import PC48_COMMANDS
+from omsd.models.pcix import PCIX_COMMANDS
 
 WY = {
     "PC48-4": b"\n\rPC48 ver 3.00-4\n\r",
@@ -498,6 +499,8 @@ def test_any_bytes_never_raise_and_wy_still_answers(data: bytes, model: str) -> 
     st.lists(_PIECES, min_size=10, max_size=120),
     st.sampled_from(["PC48-4", "PC48-4E", "PC48-6E"]),
 )
+# an encoder home search that can never find its index made the next crossing infinite
+@example(["AC", "AC", "HE", "HM", "AA", "AA", "AA", "AA", "AA", "AA"], "PC48-4E")
 def test_any_command_soup_never_raises_and_wy_still_answers(pieces: list[str], model: str) -> None:
     """Streams made of real mnemonics, numbers and separators reach much deeper into the
     interpreter than random bytes."""
@@ -508,3 +511,37 @@ def test_any_command_soup_never_raises_and_wy_still_answers(pieces: list[str], m
         t = deliver(board, data[start : start + 7], t)[0] + 0.01
     board.advance(t + 1.0)
     recover_and_ask_wy(board, t + 1.0, model)
+
+
+_PCIX_PIECES = st.one_of(
+    st.sampled_from(sorted(PCIX_COMMANDS)),
+    st.sampled_from(["0", "1", "-5", "+7", ".5", "100.9", "2000", "-33554432", "99999999", "ff"]),
+    st.sampled_from([",", ";", " ", "\r", "\n", "?", "*", "^", "\x00", "\x19", "\x1a", "\xff"]),
+    st.integers(min_value=-10_000_000, max_value=10_000_000).map(str),
+)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.lists(_PCIX_PIECES, min_size=10, max_size=120),
+    st.sampled_from(["PCIX-400", "PCIX-202", "PCIX-040", "PCIX-004"]),
+)
+def test_any_pcix_command_soup_never_raises_and_wy_still_answers(
+    pieces: list[str], model: str
+) -> None:
+    """The PCIx's own language: three-letter mnemonics, ?XX queries, macros (MD ... ^Z),
+    ramp tables (DAR ... DAE), servo gains. After Control-D (which also ends a macro definition
+    being received) and ^Z, DAE for a table left open, the board answers WY."""
+    board = Board(get_model(model), now=0.0)
+    data = "".join(pieces).encode("latin-1")
+    t = 0.0
+    for start in range(0, len(data), 7):
+        t = deliver(board, data[start : start + 7], t)[0] + 0.01
+    board.advance(t + 1.0)
+    t, dropped = deliver(board, b"\x04 DAE; AX;", t + 1.0)
+    assert dropped == 0
+    board.advance(t + 0.5)
+    board.take_output()
+    assert board.receive(b"WY;", t + 0.5) == 3
+    board.advance(t + 0.6)
+    assert board.take_bytes() == get_model(model).who_are_you().encode() + b"\n\r"

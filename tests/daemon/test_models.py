@@ -1,4 +1,4 @@
-"""The daemon serves every personality: ``omsd models`` lists all sixteen, and a VS4 and a
+"""The daemon serves every personality: ``omsd models`` lists all twenty-three, and a VS4 and a
 PC46 board answer WY through the driver link (issue 4: "Every model name is accepted by
 ``--board`` ... and listed by ``omsd models``, and the driver and raw links work with each")."""
 
@@ -25,15 +25,22 @@ ALL_MODELS = [
     "PC46-4E",
     "VS4-020",
     "VS4-040",
+    "PCIX-002",
+    "PCIX-020",
+    "PCIX-202",
+    "PCIX-200",
+    "PCIX-004",
+    "PCIX-040",
+    "PCIX-400",
 ]
 
 
-def test_models_lists_all_sixteen() -> None:
+def test_models_lists_every_model() -> None:
     result = run_omsd("models")
     assert result.returncode == 0, result.stderr
     listed = [line.split()[0] for line in result.stdout.splitlines() if line.strip()]
     assert sorted(listed) == sorted(ALL_MODELS)
-    assert len(listed) == 16
+    assert len(listed) == 23
     assert result.stderr == ""
 
 
