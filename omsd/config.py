@@ -79,7 +79,7 @@ from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 
-from omsd.board.world import AxisWorld, SwitchType
+from omsd.board.world import AxisWorld, LimitWiring, SwitchType
 from omsd.models import MODELS, UnknownModel, get_model, variant
 from omsd.models.spec import Model
 
@@ -513,6 +513,9 @@ def _axis_world(value: object, at: _At, model: Model, letter: str) -> AxisWorld:
         elif kind is SwitchType:
             choices = tuple(s.value for s in SwitchType)
             changes[key] = SwitchType(_choice(raw, choices, at.key(key)))
+        elif kind is LimitWiring:
+            choices = tuple(s.value for s in LimitWiring)
+            changes[key] = LimitWiring(_choice(raw, choices, at.key(key)))
         elif kind is int and key == "encoder_counts_per_rev":
             changes[key] = _integer(raw, at.key(key), 1)
         elif kind is int:

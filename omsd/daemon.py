@@ -162,6 +162,12 @@ class Daemon:
         flash = state.board(service.name)
         board.flash_defaults = flash.defaults
         board.flash_macros = dict(flash.macros)
+        if not board.flash_matches():
+            assert flash.defaults is not None
+            service.log.warning(
+                f"state file: board {service.name!r} was saved as a {flash.defaults.get('model')}"
+                f", not a {service.model.name}; using factory defaults (AP replaces them)"
+            )
         board.load_flash()
         board.flash_writer = saver.writer(service.name)
 

@@ -25,7 +25,7 @@ from omsd.board import profiles as pf
 from omsd.board.profiles import Trajectory
 from omsd.board.queue import CommandQueue, SyncGroup
 from omsd.board.servo import ServoLoop
-from omsd.board.world import AxisWorld, SwitchType
+from omsd.board.world import AxisWorld, LimitWiring, SwitchType
 
 if TYPE_CHECKING:
     from omsd.board.board import Board
@@ -89,6 +89,8 @@ class Axis:
         self.world = world
         self.has_encoder = board.model.has_encoder(letter)
         self.is_servo = board.model.is_servo(letter)
+        self.servo_trip_reported = False  # the trip of the loop's current closing was reported
+        self.servo_last: float | None = None  # motor position at the last look (on_servo)
         # PCIx servo axis: the PID loop and motor (omsd.board.servo); the trajectory is the
         # commanded position, the loop's motor the actual one (RE, EA)
         self.servo: ServoLoop | None = (
@@ -123,6 +125,7 @@ class Axis:
         self.direction_inverted: bool = False  # DBI / DBN
         self.limit_high: bool = False  # LH / LL
         self.slip_kill: bool = False  # TN / TF
+        self.soft_limit = False  # PCIx SL / SF (the older boards: Board.soft_limits)
         # PCIx motion state (omsd.board.pcix_motion); inert on the older boards
         self.gear: Gear | None = None  # EG / TX: the axis this one follows
         self.travel_limits: tuple[float, float] | None = None  # TL (lower, upper); TL0,0: None
@@ -193,10 +196,18 @@ class Axis:
     def servo_check_time(self) -> float | None:
         """When the loop must next be looked at for a runaway (while it has work to do)."""
         loop = self.servo
-        if loop is None or not loop.closed:
+        if loop is None:
             return None
-        if self.motion is Motion.IDLE and loop.at_rest(0.25):
+        if loop.tripped and not self.servo_trip_reported:
+            return max(loop.time, self.board.now)  # found by a query's look at the loop
+        if not loop.closed:
             return None
+        if self.motion is Motion.IDLE:
+            # still since the last look (at rest, or held off its set point by KO against KU),
+            # and nothing changed since (gains, HN): nothing will change
+            last = self.servo_last
+            if last is not None and abs(loop.position - last) < 1e-6 and abs(loop.velocity) < 1e-3:
+                return None
         return loop.time + SERVO_CHECK
 
     def counter(self, t: float) -> int:
@@ -268,11 +279,18 @@ class Axis:
                 return True
         forced = self.board.world.forced_limit(self.index, direction)
         if forced is not None:
-            return forced
-        p = self.phys(t)
-        if direction > 0:
-            return p >= self.world.positive_limit
-        return p <= self.world.negative_limit
+            hit = forced
+        else:
+            p = self.phys(t)
+            w = self.world
+            hit = p >= w.positive_limit if direction > 0 else p <= w.negative_limit
+        wiring = self.world.limit_switches
+        if wiring is LimitWiring.MATCHED:
+            return hit
+        # the line's level: a normally open switch grounds it when hit, a normally closed one
+        # until hit; LL (the power-up default) takes low as true, PCIx LH high
+        low = hit if wiring is LimitWiring.NORMALLY_OPEN else not hit
+        return (not low) if self.limit_high else low
 
     def home_switch_activated(self, t: float) -> bool:
         forced = self.board.world.forced_home.get(self.index)
@@ -321,6 +339,8 @@ class Axis:
         """Start new motion on tick ``t`` from wherever the axis is then (position and
         velocity). Until ``t`` the axis goes on as it was: asking for the position between now
         and the tick must not show the future."""
+        if self.gear is not None:  # PCIx EG: a geared axis moves only as its master does
+            return
         now = min(self.board.now, t)
         self.servo_sync(now)
         prefix = _segment(self.traj, now, t) if t > now else []

@@ -115,11 +115,17 @@ class Board:
         from omsd.board import flash
 
         flash.factory(self)
-        if self.flash_defaults is not None:
+        if self.flash_defaults is not None and self.flash_matches():
             flash.apply(self, self.flash_defaults)
         for axis in self.axes:
             axis.aux = axis.aux_default_high
         self.interpreter.macros.load_permanent(self.flash_macros)
+
+    def flash_matches(self) -> bool:
+        """Saved defaults are for this model (a board renamed onto another model in the config
+        must not load a stranger's parameters)."""
+        saved = self.flash_defaults
+        return saved is None or saved.get("model", self.model.name) == self.model.name
 
     def write_flash(self, defaults: dict[str, Any] | None = None) -> None:
         """AP / ADH / ADL (``defaults`` given) and PT: write flash and hand it to the keeper."""

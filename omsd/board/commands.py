@@ -100,7 +100,7 @@ def _simple(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if cmd.fields:
         raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
     axis = ix.axis
-    if cmd.mnemonic == "MO" and axis.has_encoder:
+    if cmd.mnemonic == "MO" and axis.has_encoder and ix.board.model.dialect != "pcix":
         raise CommandFailed(ErrorKind.ENCODER_MODEL)
     ix.enqueue([(axis, Op(cmd.mnemonic, (), ix.cost(cell, axis)))])
 
@@ -366,13 +366,21 @@ def _go(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("JG", "JF")
 def _jog(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    axis = ix.axis
-    raw = ix.one(cmd)
-    assert raw is not None
-    v = ix.convert(axis, raw, "frac" if cmd.mnemonic == "JF" else "vel")
+    # single-axis on the PC48; the PCIx also takes ``JG#,#,#,#;`` in AA/AM
+    if ix.mode == "single":
+        raw = ix.one(cmd)
+        assert raw is not None
+        items = {ix.axis_index: raw}
+    else:
+        items = ix.per_axis(cmd)
     limit = ix.board.model.jog_limit
-    check_range(v, -limit, limit)
-    ix.enqueue([(axis, Op(cmd.mnemonic, (v,), ix.cost(cell, axis)))])
+    ops = []
+    for index, value in items.items():
+        axis = ix.board.axes[index]
+        v = ix.convert(axis, value, "frac" if cmd.mnemonic == "JF" else "vel")
+        check_range(v, -limit, limit)
+        ops.append((axis, Op(cmd.mnemonic, (v,), ix.cost(cell, axis))))
+    ix.enqueue(ops)
 
 
 @handles("VS")

@@ -26,8 +26,10 @@ def _tables(dialect: str, max_queries: bool) -> dict[str, Handler]:
     table = dict(HANDLERS)
     if dialect == "pcix":
         from omsd.board.pcix_commands import PCIX_HANDLERS
+        from omsd.board.pcix_motion import MOTION_HANDLERS
 
         table.update(PCIX_HANDLERS)
+        table.update(MOTION_HANDLERS)
         if max_queries:
             from omsd.board.max_family import MAX_HANDLERS
 

@@ -13,6 +13,7 @@ finding home (§6.11), detecting slip (§6.16) and the position-hold correction 
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING
@@ -37,6 +38,11 @@ class Executor:
         self._ops: dict[str, Callable[[Axis, Op, float], Result]] = {
             name[4:]: getattr(self, name) for name in dir(self) if name.startswith("_op_")
         }
+        if board.model.dialect == "pcix":
+            from omsd.board.pcix_motion import MOTION_OPS
+
+            for code, fn in MOTION_OPS.items():
+                self._ops[code] = functools.partial(fn, self)
 
     def _op_SET(self, axis: Axis, op: Op, t: float) -> Result:
         """A queued parameter change: ``Op("SET", (mnemonic, apply), slots)`` runs
@@ -53,10 +59,14 @@ class Executor:
         loop = axis.servo
         assert loop is not None
         axis.servo_sync(t)
-        if loop.tripped and axis.motion is not Motion.IDLE:
-            axis.halt(t)
+        if loop.tripped and not axis.servo_trip_reported:
+            # moving or holding: either way the axis is no longer under control
+            axis.servo_trip_reported = True
+            if axis.motion is not Motion.IDLE:
+                axis.halt(t)
             self.flush(axis, t)
             self.board.emit(ServoTripEvent(t, axis.letter, loop.following_error))
+        axis.servo_last = loop.position
         axis.invalidate()
 
     # -- the queue ----------------------------------------------------------------------------
@@ -168,6 +178,10 @@ class Executor:
         axis.in_fire = None
         self.board.interpreter.forget_loops(axis.index)
         self.drop_from_groups(axis, dropped, t)
+        if axis.gear is not None:  # PCIx: FL, KL, KS, SA, SD, SI "also cancel electronic gearing"
+            from omsd.board.pcix_motion import disengage
+
+            disengage(axis, t)
         axis.invalidate()
 
     # -- parameter ops ------------------------------------------------------------------------
@@ -226,11 +240,18 @@ class Executor:
         return None
 
     def _op_SL(self, axis: Axis, op: Op, t: float) -> Result:
-        self.board.soft_limits = True
+        # PC48: one mode for the board; PCIx ``SLb,b,b,b``: per axis
+        if self.board.model.dialect == "pcix":
+            axis.soft_limit = True
+        else:
+            self.board.soft_limits = True
         return None
 
     def _op_SF(self, axis: Axis, op: Op, t: float) -> Result:
-        self.board.soft_limits = False
+        if self.board.model.dialect == "pcix":
+            axis.soft_limit = False
+        else:
+            self.board.soft_limits = False
         return None
 
     def _op_DIR(self, axis: Axis, op: Op, t: float) -> Result:
@@ -246,6 +267,10 @@ class Executor:
         n = op.args[0]
         x = axis.position(t)
         axis.load_counter(t, x - n * math.floor(axis.counter(t) / n))
+        if self.board.model.dialect == "pcix" and axis.has_encoder:
+            # PCIx RM: "The RM command has the same effect on the encoder position register"
+            e = axis.encoder(t)
+            axis.anchor_encoder(t, float(e - n * math.floor(e / n)))
         axis.anchor_tracking(t)
         return None
 
@@ -295,6 +320,8 @@ class Executor:
                 axis.load_counter(t, float(loop.encoder_counts))
                 loop.set_position(loop.position)
             loop.closed = True
+            axis.servo_trip_reported = False
+            axis.servo_last = None
             axis.invalidate()
             return None
         if not axis.hold:
@@ -472,6 +499,7 @@ class Executor:
             targets[axis.index] = target
             if p.linear is not None:
                 linear.append(axis)
+        saved = {a.index: (a.vl, a.ac, a.vb) for a in linear}
         if linear:
             self._interpolate(linear, targets, tick)
         for axis in axes:
@@ -482,6 +510,11 @@ class Executor:
             pieces = pf.move_pieces(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
             if distance:
                 axis.direction = 1 if distance > 0 else -1
+            if axis.index in saved and self.board.model.dialect == "pcix":
+                # PCIx ML/MT: "At the end of the move, all involved velocities and accelerations
+                # will be restored" (the PC48 leaves the scaled values, and says so); the move
+                # keeps its scaled profile, the registers get their values back at once
+                axis.vl, axis.ac, axis.vb = saved[axis.index]
             axis.begin(tick, pieces, Motion.MOVE, final=target)
             axis.home = None
             if axis.motion is Motion.IDLE:
@@ -511,6 +544,8 @@ class Executor:
         # "Output events waiting for completion of JG will begin when JG is up to its requested
         # velocity". The ramp is linear in every ramp mode (its queue table: "Linear ramp").
         v = axis.to_motor(op.args[0])
+        if self.board.model.dialect == "pcix":
+            axis.slip_detect = False  # PCIx IS: disabled by "... JG ..."
         tick = self.board.clock.at_or_after(t)
         v0 = axis.velocity(tick)
         if v:
@@ -781,6 +816,10 @@ class Executor:
         axis.sensor_check = None
         axis.invalidate()
         board = self.board
+        if board.model.dialect == "pcix":  # backlash taken up, GS's home switch
+            from omsd.board.pcix_motion import sensed
+
+            sensed(axis, t)
         if axis.motion not in (Motion.IDLE, Motion.STOP) and axis.limits_on:
             direction = axis.direction_at(t)
             if direction and axis.limit_active(direction, t):
@@ -825,10 +864,19 @@ class Executor:
         board = self.board
         axis.limit_latched = direction
         self.hold_off(axis)
-        if board.soft_limits and axis.motion is Motion.MOVE:
+        if axis.servo is not None and axis.servo.closed:
+            # PCIx HN: the loop "is disabled when ... a limit is encountered"
+            axis.servo_sync(t)
+            axis.servo.closed = False
+        if board.model.dialect == "pcix":
+            # PCIx SL: "effective for point to point and JG moves only", per axis
+            ramp = axis.soft_limit and axis.motion in (Motion.MOVE, Motion.JOG)
+        else:
             # SL: "ramp down instead of terminating immediately. The output queue is not
             # flushed except for the current move. This mode is effective for point to point
             # moves only."
+            ramp = board.soft_limits and axis.motion is Motion.MOVE
+        if ramp:
             axis.decelerate(t)
         else:
             axis.halt(t)

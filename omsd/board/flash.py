@@ -54,6 +54,7 @@ def axis_parameters(axis: Axis) -> dict[str, Any]:
         "limits_on": axis.limits_on,
         "PA": axis.pa,
         "SE": axis.se_ms,
+        "SL": axis.soft_limit,
         "UU": None if axis.uu is None else str(axis.uu),
         "aux_high": axis.aux_default_high,
         "direction_inverted": axis.direction_inverted,
@@ -67,6 +68,7 @@ def axis_parameters(axis: Axis) -> dict[str, Any]:
 def board_parameters(board: Board) -> dict[str, Any]:
     """The parameter set AP writes."""
     return {
+        "model": board.model.name,
         "axes": {a.letter: axis_parameters(a) for a in board.axes},
         "soft_limits": board.soft_limits,
         "tables": {str(n): [list(p) for p in table] for n, table in board.ramp_tables.items()},
@@ -98,6 +100,7 @@ def _apply_axis(axis: Axis, p: dict[str, Any], board: Board) -> None:
         ("limits_on", "limits_on"),
         ("aux_high", "aux_default_high"),
         ("direction_inverted", "direction_inverted"),
+        ("SL", "soft_limit"),
     ):
         if isinstance(p.get(key), bool):
             setattr(axis, attr, p[key])
@@ -137,6 +140,8 @@ def ramp_from(ramp: dict[str, Any], board: Board) -> pf.RampShape | None:
         return custom_ramp(board, table)
     if kind is pf.RampKind.SCURVE:
         return scurve_ramp(board, table)
+    if kind is pf.RampKind.PARABOLIC:
+        return pf.RampShape(kind, steps, floor=0.1)  # the PCIx's PN/PR (pcix_commands.parabolic)
     return pf.RampShape(kind, steps)
 
 
@@ -194,7 +199,7 @@ def factory(board: Board) -> None:
         axis.vl = float(model.default_velocity)
         axis.vb = 0.0
         axis.dc = 200_000.0
-        axis.es = 0.0
+        axis.es = 1.0  # ES: "The factory default value is 1"
         axis.hd = 0.0
         axis.hg = 1.0
         axis.hv = 0.0
@@ -205,6 +210,7 @@ def factory(board: Board) -> None:
         axis.limits_on = True
         axis.pa = None
         axis.se_ms = 0
+        axis.soft_limit = False
         axis.uu = None
         axis.aux_default_high = True
         axis.direction_inverted = False

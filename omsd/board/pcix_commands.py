@@ -134,10 +134,7 @@ def _ap(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _rd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "restores the motion parameters using power-up defaults" (the factory values where AP
     was never used)."""
-    board = ix.board
-    flash.factory(board)
-    if board.flash_defaults is not None:
-        flash.apply(board, board.flash_defaults)
+    ix.board.load_flash()
 
 
 @handles("RF")
@@ -220,6 +217,12 @@ def _ramp_setter(shape: Callable[[Axis], pf.RampShape | None]) -> Callable[[Axis
     return apply
 
 
+def parabolic(steps: int) -> pf.RampShape:
+    """PN/PR: "the acceleration starts at 100% and is reduced in 10% steps ... down to as low as
+    10%": PN3 ends its ramp at 70% of AC, PN9 and PN10 at 10%."""
+    return pf.RampShape(pf.RampKind.PARABOLIC, steps, floor=0.1)
+
+
 def _steps(value: Decimal | None) -> int:
     # "A parameter out of this range or no parameter supplied defaults to 70% or 3 steps."
     if value is not None and 3 <= value <= 10:
@@ -242,7 +245,7 @@ def _cn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("PN")
 def _pn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    shape = pf.RampShape(pf.RampKind.PARABOLIC, _steps(ix.one(cmd, required=False)))
+    shape = parabolic(_steps(ix.one(cmd, required=False)))
     _apply(ix, cmd, cell, list(ix.board.axes), _ramp_setter(lambda a: shape), t)
 
 
@@ -266,7 +269,7 @@ def _pr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         items = dict(ix.per_axis(cmd))
     ops = []
     for index, value in items.items():
-        shape = pf.RampShape(pf.RampKind.PARABOLIC, _steps(value))
+        shape = parabolic(_steps(value))
         axis = ix.board.axes[index]
         apply = _ramp_setter(lambda a, s=shape: s)  # type: ignore[misc]
         ops.append((axis, Op("SET", ("PR", apply), ix.cost(cell, axis))))
@@ -443,6 +446,7 @@ def _set_gains(**changes: float | bool) -> Callable[[Axis, float], None]:
         if axis.servo is not None:
             axis.servo_sync(t)
             axis.servo.set_gains(replace(axis.servo.gains, **changes))  # type: ignore[arg-type]
+            axis.servo_last = None  # look at the loop again: it may run away now
             axis.invalidate()
 
     return apply
@@ -617,7 +621,14 @@ for _m in _QUERIES:
 
 @handles("?SL")
 def _q_sl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    _reply(ix, "sl" if ix.board.soft_limits else "sf", t)
+    _reply(ix, "sl" if ix.axis.soft_limit else "sf", t)
+
+
+@handles("UF")
+def _uf(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """User units off: ``UF;`` or ``UFb,b,b,b;`` ("equivalent to and preferred over UU1;")."""
+    for axis in _flag_axes(ix, cmd):
+        axis.uu = None
 
 
 @handles("?ER")
@@ -640,22 +651,22 @@ def _q_uu(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("RQ")
 def _rq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """ "800, 800, 800, 800"; inside a contour definition the contour queue (7160)."""
+    """Every axis's free queue units, whatever the mode: the example types ``RQ`` with no mode
+    command (every other example that needs AA types ``AA;`` first) and gets "800, 800, 800,
+    800"; "MAX value of command queue for all axes = 800". Inside a contour definition the
+    contour queue (7160)."""
     if ix.contour is not None:
         _reply(ix, str(ix.contour.free), t)
-    elif ix.mode == "single":
-        _reply(ix, str(ix.axis.queue.free), t)
     else:
         _reply(ix, ", ".join(str(a.queue.free) for a in ix.board.axes), t)
 
 
 @handles("RC")
 def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """ "2000000, 2000000, 2000000, 2000000"."""
-    from omsd.board.commands import _current_acceleration
-
+    """ "2000000, 2000000, 2000000, 2000000": the acceleration now, "zero when the stage is
+    stopped or running at constant speed" (unlike the PC48, which reports the ramp's)."""
     axes = [ix.axis] if ix.mode == "single" else ix.board.axes
-    _reply(ix, ", ".join(str(int(_current_acceleration(ix, a, t))) for a in axes), t)
+    _reply(ix, ", ".join(str(math.trunc(abs(a.acceleration(t)))) for a in axes), t)
 
 
 @handles("RU")
@@ -742,6 +753,26 @@ def _ra(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.board.reply_status(_status(axis, t), t)
     if cmd.mnemonic == "RA":
         _reset_flags(ix, [axis], t)
+
+
+@handles("CA")
+def _ca(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "In multi-axis modes, the CA command clears the flags of all selected axes" (``AA;
+    CA,1,1;`` clears Y and Z); "Unlike the IC command, CA will not clear other error flags"."""
+    ix.board.clear_done(_flag_axes(ix, cmd))
+
+
+@handles("AN", "AF")
+def _an(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """AN/AF; in a contour definition "The AN and AF commands must have commas for all axes"
+    and an axis without a value is left alone, so ``AN,,;`` changes nothing (the CK example)."""
+    from omsd.board.commands import _aux
+
+    if ix.contour is not None and not any(f is not None for f in cmd.fields or ()):
+        if not ix.contour.add(None, ix.cost(cell, ix.axis)):
+            raise CommandFailed(ErrorKind.CONTOUR_FULL)
+        return
+    _aux(ix, cmd, cell, t)
 
 
 @handles("SW", "BW")

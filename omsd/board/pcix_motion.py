@@ -16,11 +16,14 @@ Electronic gearing (§5.12.5 EG, EGF, EG?; §5.7.3 TX)
     500 or 501 and the next one makes up the half count.
 
     * "Once a gearing engagement command is issued the geared axis will only respond to immediate
-      commands until the gearing is cancelled." Chosen reading: the geared axis's command queue is
-      *held*; commands sent to it are queued as usual and run once the gearing is cancelled.
-      (An AA command that puts entries in every queue, a GO or WT in AA mode, therefore waits for
-      a geared axis; AM mode moves the other axes.) EG itself is queued ("EG#,#,#, AX – AT 2")
-      and engages when the queue reaches it; TX is immediate.
+      commands until the gearing is cancelled." Chosen reading: a geared axis moves only as its
+      master does. Commands queued for it still run in their turn (parameters such as VL or AC
+      change, done flags are set), but none of them moves it: a GO, JG, HM, TM ... addressed to a
+      geared axis starts nothing. Holding its queue instead would make every AA command that
+      puts entries in all queues (GO, WT, CX, ...) wait for the gearing to end, hanging the
+      other axes; rejecting the commands would leave an EG that is still queued (it is queued:
+      "EG#,#,#, AX – AT 2", and engages when the queue reaches it) with commands after it that
+      were accepted. TX is immediate.
     * Cancelled by "The EGF command ... or over-travel on the geared axis", and "the following
       commands FL, KL, KS, SA, SD or SI flush the axis queue and will also cancel electronic
       gearing": every flush of the geared axis's queue cancels it (so ST and FP do too). When the
@@ -66,14 +69,16 @@ Moves and stops
       profile is linear whatever the axis's ramp selection (and VB, which "will not work in
       conjunction with the DC command", is not used). A move too short to reach VL is
       triangular, peaking where the two ramps meet.
-    * DC (§5.8.2): 1..8,000,000; "defaults to 200,000 and will take on whatever value is
-      entered via the AC command" (AC sets ``Axis.dc``).
+    * DC (§5.8.2) is set by :mod:`omsd.board.pcix_commands` ("defaults to 200,000 and will take
+      on whatever value is entered via the AC command").
     * GN: GO, then "set the axis done flags when the move is complete" (with the interrupt, as
       ID). In AA mode each axis's flag is set as it finishes and DON_S once all have, as AA ID
       does.
     * GS: GO with the home switch monitored: "If the home switch becomes active the slip flag will
-      be set for the axis". Chosen: the slip flag is what slip detection sets (RL/EA's slip, status
-      ENC_S with DON_S), raised each time the switch becomes active during the move.
+      be set for the axis". Chosen: the slip flag is what slip detection sets (the axis's slip
+      flag, status ENC_S with DON_S and its interrupt), raised each time the switch becomes
+      active during the move. (RL cannot show it: "Open-loop stepper always returns “n”", and GS
+      is for open-loop steppers only.)
     * SO#,# (§5.9.4): "continue moving until reaching a specified distance (parameter 2) from a
       specified stop point (parameter 1). The axis will then ramp to a stop within the specified
       distance": the deceleration is whatever stops it exactly there. If the axis is already
@@ -108,15 +113,17 @@ Limits, positions, contours
       ``TL0,0;`` switches them off; a lower limit above the upper one is a range error. The range
       is the position range (the page prints 33,544,431, the LP page 33,554,431, a digit slip).
       ?TL answers ``tl<upper>,<lower>`` in counts (the manual's ``t!101000,-1000`` is an OCR
-      garble of ``tl``), ``tl0,0`` when off.
+      garble of ``tl``); when they are off it answers ``tl0,0;`` as printed (E195 ``t!0,0;``,
+      with the semicolon the other reply lacks: the command that turns them off).
     * LO (§5.7.5): "sets the motor position independently of the encoder position": the position
       counter is loaded, the encoder is left alone (and slip detection re-anchored, so the new
       difference is not slip). On a servo the counter is the commanded position, so a closed
       loop drives the motor to it, which is what loading a servo's command register does.
     * CG (§5.9.8): CX, but "the following MT commands will be on hold until the contour execution
       is complete": an MT received after CG waits (holding the interpreter, like a full queue)
-      until every axis has finished the contour. Position maintenance on stepper axes is
-      cancelled by CG and CX (the HN page).
+      until every axis has finished the contour (this module's MT handler wraps the PCIx one to
+      do it). CG cancels stepper position maintenance on the contour's axes (the HN page: "CG,
+      CX").
     * NV (§5.9.8, "AA/CD Immediate"): "set a new velocity for a contour currently in execution
       ... the PCIX will switch to the new velocity at the start of the next command in the
       contour queue without ramping. An NV command issued without a contour currently executing
@@ -158,8 +165,6 @@ OpFunction = Callable[["Executor", Axis, Op, float], Result]
 GEAR_RATE_LIMIT = 1_048_574
 #: BC: "0 ≤ BACKLASH ≤ +50 STEPPERS", "-50 ≤ BACKLASH ≤ +50 SERVOS".
 BACKLASH_LIMIT = 50
-#: DC: "1 ≤ DC ≤ 8000000".
-DC_LIMIT = 8_000_000
 #: TM: "0 ≤ TM ≤ 200,000" (milliseconds).
 TM_LIMIT = 200_000
 #: NV: "1 ≤ NV ≤ 1,043,999".
@@ -427,9 +432,8 @@ def _bc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """BC# (§5.12): "between 0 and 50 for stepper motors and between -50 and +50 for servo
     motors"."""
     axis = ix.axis
-    raw = ix.one(cmd)
-    assert raw is not None
-    value = truncate(raw)
+    raw = ix.one(cmd, required=False)
+    value = 0 if raw is None else truncate(raw)  # the BC page's format is "BC;"
     check_range(value, -BACKLASH_LIMIT if axis.is_servo else 0, BACKLASH_LIMIT)
     if cell.kind is Kind.IMMEDIATE:
         set_backlash(axis, value, t)
@@ -499,22 +503,7 @@ def take_up_backlash(axis: Axis, t: float) -> None:
     axis.invalidate()
 
 
-# -- parameters: DC, TL, LO ----------------------------------------------------------------------
-
-
-@_handles("DC")
-def _dc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """DC# (§5.8.2): the deceleration GU uses, "1 ≤ DC ≤ 8000000"."""
-    axis = ix.axis
-    raw = ix.one(cmd)
-    assert raw is not None
-    value = ix.convert(axis, raw, "acc")
-    check_range(value, 1, DC_LIMIT)
-
-    def apply(a: Axis, when: float) -> None:
-        a.dc = a.to_motor(value)
-
-    ix.enqueue([(axis, Op("SET", ("DC", apply), ix.cost(cell, axis)))])
+# -- parameters: TL, LO ----------------------------------------------------------------------
 
 
 def _position(ix: Interpreter, axis: Axis, raw: Decimal) -> float:
@@ -553,7 +542,10 @@ def _tl_query(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """?TL (§5.5.4): "The first value returned is the upper (or "positive") limit and the second
     value is the lower"."""
     limits = ix.axis.travel_limits
-    lower, upper = limits if limits is not None else (0.0, 0.0)
+    if limits is None:
+        ix.board.reply_value("tl0,0;", t)  # as printed for "soft limits ... disabled"
+        return
+    lower, upper = limits
     ix.board.reply_value(f"tl{math.trunc(upper)},{math.trunc(lower)}", t)
 
 
@@ -1062,16 +1054,6 @@ def sensed(axis: Axis, t: float) -> None:
         _watch_home(axis, watch, t)
 
 
-def flushed(axis: Axis, t: float) -> None:
-    """The axis's queue was flushed: electronic gearing is cancelled."""
-    disengage(axis, t)
-
-
-def held(axis: Axis) -> bool:
-    """A geared axis does not run its queue (see EG)."""
-    return axis.gear is not None
-
-
 __all__ = [
     "MOTION_HANDLERS",
     "MOTION_OPS",
@@ -1083,9 +1065,7 @@ __all__ = [
     "contour_pending",
     "disengage",
     "engage",
-    "flushed",
     "follow",
-    "held",
     "moved",
     "sensed",
     "set_backlash",

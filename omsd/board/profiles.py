@@ -401,6 +401,9 @@ class RampShape:
     table: int = 0  # SR# / SS#
     breakpoints: tuple[tuple[float, float], ...] = ()
     scurve: SCurve | None = None
+    # the lowest acceleration a parabolic ramp falls to, as a fraction of AC: the PCIx's PN/PR
+    # "down to as low as 10%" (so PN10 ends its ramp at 10% of AC, as PN9 does); 0 on the PC48
+    floor: float = 0.0
 
     @property
     def segments(self) -> int:
@@ -409,7 +412,7 @@ class RampShape:
     @property
     def ratio(self) -> float:
         """t/T_2 at the end of a parabolic ramp: PC48 §1.3, "10 times the ratio t/T_2"."""
-        return self.steps / 10.0
+        return min(self.steps / 10.0, 1.0 - self.floor)
 
 
 LINEAR = RampShape()

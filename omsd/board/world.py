@@ -32,6 +32,20 @@ class SwitchType(Enum):
     NORMALLY_CLOSED = "normally_closed"
 
 
+class LimitWiring(Enum):
+    """How the limit switches drive their lines. ``MATCHED`` (the default): wired to suit the
+    board's limit level, whatever it is set to (a hit switch is always a limit; the PCIx's LH/LL
+    and the MAX-family LT? then only report the setting). ``NORMALLY_OPEN``: the line is pulled up
+    and grounded while the switch is hit, which the PCIx's LL ("TTL logic low ... the 'true'
+    state", its power-up default) expects; ``NORMALLY_CLOSED``: grounded until the switch is hit,
+    for LH. With an explicit wiring and the other level set, the board sees a limit everywhere
+    but at the switch, as a real card would."""
+
+    MATCHED = "matched"
+    NORMALLY_OPEN = "normally_open"
+    NORMALLY_CLOSED = "normally_closed"
+
+
 @dataclass(frozen=True)
 class AxisWorld:
     """Configuration of one axis's stage. Defaults are chosen so that a newcomer's first
@@ -44,6 +58,7 @@ class AxisWorld:
     home_low: float = 1_000.0
     home_high: float = 1_100.0
     home_switch: SwitchType = SwitchType.NORMALLY_OPEN
+    limit_switches: LimitWiring = LimitWiring.MATCHED
     encoder_counts_per_rev: int = 4_000
     encoder_index: int = 0  # encoder count, modulo a revolution, where the index pulse is
 

@@ -511,6 +511,9 @@ def _pcix(name: str, axes: str, servo: str, encoders: str, description: str) -> 
         max_queries=True,
         max_jog_velocity=1_043_999,  # "-1,043,999 ≤ JG ≤ 1,043,999"
         init_time=0.1,  # not given by the PCIx manual: the PC48's
+        # VS: "time in 1 update rate second sample intervals"; the example's "assumes an update
+        # rate of 1024" is the older boards' (the PCIx updates 2048 times a second)
+        velocity_stream_rate=2048,
     )
 
 
