@@ -725,9 +725,10 @@ def _rl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("EA")
 def _ea(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """Encoder status, five characters (digest §6.3): slip detection E/D, position maintenance
-    (or a servo's closed loop) E/D, slip S/N, in position P/N, home H/N; one field per axis in
-    AA/AM."""
+    """Encoder status, five characters (§5.4.6's table): slip detection E/D, position
+    maintenance (or a servo's closed loop) E/D, slip S/N, in position P/N, and home: the table
+    prints ``P`` for "Encoder is at home condition", which is sent as printed (the PC48 and VS4
+    print ``H``); one field per axis, comma separated, in AA/AM."""
     axes = [ix.axis] if ix.mode == "single" else ix.board.axes
     texts = []
     for axis in axes:
@@ -739,7 +740,8 @@ def _ea(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
                     "E" if hold else "D",
                     "S" if axis.slipped else "N",
                     "P" if hold and axis.in_position else "N",
-                    "H" if axis.home_condition(t) else "N",
+                    # "P Encoder is at home condition" (the older boards print H here)
+                    "P" if axis.home_condition(t) else "N",
                 )
             )
         )

@@ -732,3 +732,23 @@ def test_per_axis_queries_are_not_valid_in_multi_axis_mode(query: str) -> None:
     h = Harness(MODEL)
     assert h.send(f"AM;{query};\n") == b""
     assert [e.kind for e in h.errors()] == [ErrorKind.NOT_VALID_IN_MODE]
+
+
+def test_closed_loop_and_encoder_load_commands_the_client_sends() -> None:
+    """omsBaseController::writeInt32 / writeFloat64: ``A? CL1`` / ``A? CL0`` (firmware 1.30 and
+    later; HN/HF before) and ``A? LPE%d;`` (set the encoder position). CL closes and opens the
+    servo loop as HN/HF do; LPE loads the encoder (and the position counter, as LP does on an
+    encoder axis) and must not be read as LP0 followed by an unknown ``E``."""
+    h = Harness(MODEL)
+    h.send("AX CL1\n")
+    assert reply(h, "AX CL?\n") == "=on"
+    assert reply(h, "AX ?PM\n") == "hn"
+    h.send("AX CL0\n")
+    assert reply(h, "AX CL?\n") == "=off"
+    h.send("AY LPE1234;\n")
+    assert reply(h, "AY RE\n") == "1234"
+    assert reply(h, "AY RP\n") == "1234"
+    assert h.errors() == []
+    stepper = Harness("PCIX-004")
+    stepper.send("AX CL1\n")  # an open-loop stepper has no loop to close
+    assert stepper.errors() != []
