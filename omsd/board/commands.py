@@ -28,13 +28,25 @@ Handler = Callable[[Interpreter, Command, Cell, float], None]
 HANDLERS: dict[str, Handler] = {}
 
 
-def handles(*mnemonics: str) -> Callable[[Handler], Handler]:
-    def register(fn: Handler) -> Handler:
-        for m in mnemonics:
-            HANDLERS[m] = fn
-        return fn
+Registrar = Callable[..., Callable[[Handler], Handler]]
 
-    return register
+
+def registrar(table: dict[str, Handler]) -> Registrar:
+    """A ``@handles("XX", ...)`` decorator that files handlers in ``table`` (one per dialect
+    module)."""
+
+    def handles(*mnemonics: str) -> Callable[[Handler], Handler]:
+        def register(fn: Handler) -> Handler:
+            for m in mnemonics:
+                table[m] = fn
+            return fn
+
+        return register
+
+    return handles
+
+
+handles = registrar(HANDLERS)
 
 
 def _status(axis: Axis, t: float) -> str:
@@ -367,12 +379,7 @@ def _go(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("JG", "JF")
 def _jog(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # single-axis on the PC48; the PCIx also takes ``JG#,#,#,#;`` in AA/AM
-    if ix.mode == "single":
-        raw = ix.one(cmd)
-        assert raw is not None
-        items = {ix.axis_index: raw}
-    else:
-        items = ix.per_axis(cmd)
+    items = ix.items(cmd)
     limit = ix.board.model.jog_limit
     ops = []
     for index, value in items.items():
@@ -599,12 +606,7 @@ def _ii(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("IN")
 def _in(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     board = ix.board
-    if ix.mode == "single":
-        raw = ix.one(cmd)
-        assert raw is not None
-        items = {ix.axis_index: raw}
-    else:
-        items = ix.per_axis(cmd)
+    items = ix.items(cmd)
     group = SyncGroup(set(items), barrier=False)
     group.action = lambda g, when: board.signal_done(when)
     ops = []

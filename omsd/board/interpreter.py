@@ -46,6 +46,26 @@ def _syntax(spec: CommandSpec) -> Syntax:
     return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
 
 
+INT32 = range(-(2**31), 2**31)
+
+
+def _check_32_bit(cmd: Command) -> None:
+    """PCIx §5.1: "numeric parameters must be within the range of a 32-bit signed integer ...
+    For fixed point numeric parameters, the value without the decimal point must be within the
+    range of a signed 32-bit integer. Entering parameter values outside the range of a signed
+    32-bit integer will cause a Command Error" (whatever the command's own range)."""
+    for text in cmd.fields or ():
+        if text is None:
+            continue
+        digits = text.replace(".", "")
+        try:
+            n = int(digits)
+        except ValueError:
+            continue  # an axis letter (EGX), or not a number: the command's own parsing decides
+        if n not in INT32:
+            raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+
+
 def _motor_fits(motor: str, axis: Axis) -> bool:
     """PCIx: the motor types a command applies to (servo, stepper with encoder, open loop)."""
     servo = axis.is_servo
@@ -243,6 +263,8 @@ class Interpreter:
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
         if cmd.error is not None:
             raise CommandFailed(cmd.error)
+        if model.dialect == "pcix" and not spec.hex_operand:
+            _check_32_bit(cmd)
         handler = self.handlers.get(cmd.mnemonic)
         if handler is None:  # a table row without behaviour must not take the board down
             raise CommandFailed(ErrorKind.UNKNOWN_COMMAND)
@@ -306,6 +328,15 @@ class Interpreter:
         if len(present) < count:
             raise CommandFailed(ErrorKind.MISSING_PARAMETER)
         return present
+
+    def items(self, cmd: Command) -> dict[int, Decimal]:
+        """``XX#;`` for the current axis in single-axis mode (the operand required), the
+        ``XX#,#,#,#;`` list in AA/AM (skipped fields leave their axis out)."""
+        if self.mode == "single":
+            value = self.one(cmd)
+            assert value is not None
+            return {self.axis_index: value}
+        return self.per_axis(cmd)
 
     def per_axis(self, cmd: Command, axes: list[int] | None = None) -> dict[int, Decimal]:
         """AA-syntax operands: ``MRx#,y#,z#,...;`` with skipped fields. Fields beyond the

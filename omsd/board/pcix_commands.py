@@ -31,7 +31,7 @@ from decimal import Decimal
 from omsd.board import flash
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis
-from omsd.board.commands import Handler, _reset_flags, _status
+from omsd.board.commands import Handler, _reset_flags, _status, registrar
 from omsd.board.events import ErrorKind
 from omsd.board.interpreter import CommandFailed, Interpreter
 from omsd.board.macros import PERMANENT, TEMPORARY, MacroCapture
@@ -44,13 +44,7 @@ from omsd.protocol.operands import check_range, parse_number, truncate
 PCIX_HANDLERS: dict[str, Handler] = {}
 
 
-def handles(*mnemonics: str) -> Callable[[Handler], Handler]:
-    def register(fn: Handler) -> Handler:
-        for m in mnemonics:
-            PCIX_HANDLERS[m] = fn
-        return fn
-
-    return register
+handles = registrar(PCIX_HANDLERS)
 
 
 # -- helpers --------------------------------------------------------------------------------------

@@ -143,7 +143,7 @@ from typing import TYPE_CHECKING
 
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis, HomeSearch, Motion, Wait
-from omsd.board.commands import HANDLERS, Handler, run_contour
+from omsd.board.commands import HANDLERS, Handler, registrar, run_contour
 from omsd.board.events import SlipEvent
 from omsd.board.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.board.queue import Op, SyncGroup
@@ -174,13 +174,7 @@ MOTION_HANDLERS: dict[str, Handler] = {}
 MOTION_OPS: dict[str, OpFunction] = {}
 
 
-def _handles(*mnemonics: str) -> Callable[[Handler], Handler]:
-    def register(fn: Handler) -> Handler:
-        for m in mnemonics:
-            MOTION_HANDLERS[m] = fn
-        return fn
-
-    return register
+_handles = registrar(MOTION_HANDLERS)
 
 
 def _op(code: str) -> Callable[[OpFunction], OpFunction]:
@@ -586,12 +580,7 @@ def _lo(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """LO# / LO#,#,#,# (§5.7.5): "sets the motor position independently of the encoder position";
     "For AA and AM modes, any value missing in the argument list specifies that axis is not to be
     affected"."""
-    if ix.mode == "single":
-        raw = ix.one(cmd)
-        assert raw is not None
-        items = {ix.axis_index: raw}
-    else:
-        items = ix.per_axis(cmd)
+    items = ix.items(cmd)
     ops = []
     for index, raw_value in items.items():
         axis = ix.board.axes[index]

@@ -545,3 +545,24 @@ def test_any_pcix_command_soup_never_raises_and_wy_still_answers(
     assert board.receive(b"WY;", t + 0.5) == 3
     board.advance(t + 0.6)
     assert board.take_bytes() == get_model(model).who_are_you().encode() + b"\n\r"
+
+
+@pytest.mark.parametrize(
+    ("line", "error"),
+    [
+        ("AA;AN,99999999999;", True),  # flag parameters "can be any numeric value" ... 32-bit
+        ("AA;AN,2147483647;", False),
+        ("AA;AN,-2147483648;", False),
+        ("AA;AN,-2147483649;", True),
+        ("AX;PA5000000000;", True),
+        ("AX;KP21474836.48;", True),  # in 32 bits without the point, but above KP's range
+        ("AX;KP2147.483648;", True),  # 2147483648 without the point: 33 bits
+    ],
+)
+def test_pcix_numbers_beyond_32_bits_are_command_errors(line: str, error: bool) -> None:
+    """PCIx §5.1: "Entering parameter values outside the range of a signed 32-bit integer will
+    cause a Command Error"; "For fixed point numeric parameters, the value without the decimal
+    point must be within the range"."""
+    h = Harness("PCIX-400")
+    h.send(line + "\n")
+    assert bool(h.errors()) is error

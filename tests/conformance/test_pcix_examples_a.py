@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from functools import partial
 
 import pytest
 
@@ -39,25 +38,13 @@ from omsd.board.registers import ENC_S
 from omsd.models import get_model
 
 from . import support
-from .support import done_events, errors, quiet
+from .pcix import AC0, QUEUE, RATE, VL0, end_tick, linear_move_time, quiet, reply, tick
+from .support import done_events, errors
 
-RATE = 2048  # "calculates the desired velocity 2048 times each second" (§7.2)
-AC0 = 2_000_000.0  # AC: "The default value is 2,000,000."
-VL0 = 200_000.0  # VL: "The factory default is 200,000"
-QUEUE = 800  # "The current axis command queue size for PC1x is 800."
 INIT = 0.2  # longer than the INIT time after a power cycle (omsd: 0.1 s)
-
-tick = partial(support.tick, rate=RATE)
-end_tick = partial(support.end_tick, rate=RATE)
-linear_move_time = partial(support.linear_move_time, vl=VL0, ac=AC0)
 
 
 # -- helpers --------------------------------------------------------------------------------------
-
-
-def reply(text: str) -> bytes:
-    """A PCIx reply: the manual's ``text<LF>``, framed ``text<LF><CR>``."""
-    return text.encode("ascii") + b"\n\r"
 
 
 def enter(h: Harness, *lines: str) -> bytes:

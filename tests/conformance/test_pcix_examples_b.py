@@ -27,7 +27,6 @@ where the example says "a two axes board". Home switches are put out of the way
 from __future__ import annotations
 
 import math
-from functools import partial
 
 import pytest
 
@@ -36,36 +35,14 @@ from omsd.board.harness import Harness
 from omsd.board.registers import DON_S
 from omsd.board.world import AxisWorld, LimitWiring
 
-from . import support
+from .pcix import AC0, QUEUE, RATE, end_tick, linear_move_time, quiet, reply, tick, typed
 from .support import NO_HOME, done_events, moving, velocity
 from .support import snapshot_physical as physical
 
-RATE = 2048  # "calculates the desired velocity 2048 times each second"
-AC0 = 2_000_000.0  # "Acceleration is 2000000 ( AC2000000 )"
-VL0 = 200_000.0  # "Velocity is 200000 ( VL200000 )"
-QUEUE = 800  # "The maximum available space in each command queue is 800"
-
-tick = partial(support.tick, rate=RATE)
-end_tick = partial(support.end_tick, rate=RATE)
-move_time = partial(support.linear_move_time, vl=VL0, ac=AC0)
+move_time = linear_move_time
 
 
 # -- helpers --------------------------------------------------------------------------------------
-
-
-def reply(text: str) -> bytes:
-    """A PCIx reply: the text, then LF CR (the manual prints ``text<LF>``)."""
-    return text.encode("ascii") + b"\n\r"
-
-
-def typed(h: Harness, *lines: str) -> bytes:
-    """Type the ``Enter:`` lines of an example, each ended with the Enter key."""
-    return b"".join(h.send(line + "\r") for line in lines)
-
-
-def quiet(model: str, **worlds: AxisWorld) -> Harness:
-    """A board whose home switches are out of the way (unless given)."""
-    return support.quiet(model, **worlds)
 
 
 def free(x: int, y: int = QUEUE) -> bytes:

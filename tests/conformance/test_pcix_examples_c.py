@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from functools import partial
 
 import pytest
 
@@ -43,34 +42,16 @@ from omsd.board.world import AxisWorld
 from omsd.models import get_model
 
 from . import support
+from .pcix import AC0, RATE, VL0, end_tick, linear_move_time, quiet, reply, tick, typed
 from .support import NO_HOME, moving
 
-RATE = 2048  # "calculates the desired velocity 2048 times each second"
 TICK = 1.0 / RATE
-AC0 = 2_000_000.0  # "Acceleration is 2000000 ( AC2000000 )"
-VL0 = 200_000.0  # "Velocity is 200000 ( VL200000 )"
-
-tick = partial(support.tick, rate=RATE)
-end_tick = partial(support.end_tick, rate=RATE)
-linear_move_time = partial(support.linear_move_time, vl=VL0, ac=AC0)
 
 
 # -- helpers --------------------------------------------------------------------------------------
 
 
-def value(text: str) -> bytes:
-    """A PCIx reply: the text, then LF CR (the manual prints ``text<LF>``)."""
-    return text.encode("ascii") + b"\n\r"
-
-
-def typed(h: Harness, *lines: str) -> bytes:
-    """Type ``Enter:`` lines, each ended by the Enter key; return what the board sent at once."""
-    return h.send("".join(line + "\r" for line in lines))
-
-
-def quiet(model: str, **worlds: AxisWorld) -> Harness:
-    """A board whose home switches are out of the way (unless given)."""
-    return support.quiet(model, **worlds)
+value = reply
 
 
 def ask(h: Harness, axis: str, query: str) -> bytes:
