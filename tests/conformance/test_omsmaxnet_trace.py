@@ -254,7 +254,7 @@ FIELD = {
     "PP": rb"-?\d+",
     "RV": rb"-?\d+",
     "RI": rb"[PM][DN][LN][HN]",  # §6.2, the README's [PM][DN][LN][HN]
-    "EA": rb"[ED][ED][SN][PN][HN]",  # §6.3
+    "EA": rb"[ED][ED][SN][PN][PN]",  # §6.3 (home: "P Encoder is at home condition")
     "CL?": rb"on|off",
 }
 SINGLE = {
