@@ -23,6 +23,7 @@ from omsd.config import (
     ConfigError,
     from_options,
     load_config,
+    with_control_option,
     with_state_option,
 )
 from omsd.link import KINDS
@@ -62,6 +63,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--eos", metavar="HEX", help="driver end-of-string character, like E:XX (0A)")
     p.add_argument("--log", metavar="FILE", help="append the traffic to FILE as JSON lines")
     p.add_argument("--view", choices=VIEWS, help="traffic on standard error (default auto)")
+    p.add_argument(
+        "--control",
+        metavar="PATH",
+        help="the control socket (default $XDG_RUNTIME_DIR/omsd/control.sock; off: none)",
+    )
     p.add_argument(
         "--state",
         metavar="FILE",
@@ -105,6 +111,7 @@ def _serve(args: argparse.Namespace) -> int:
         else:
             config = from_options(args.board, args.tcp, args.pty, args.link, args.eos, None)
         config = with_state_option(config, args.state)
+        config = with_control_option(config, args.control)
     except ConfigError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2

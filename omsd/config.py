@@ -177,6 +177,19 @@ class DaemonConfig:
     log: LogConfig = field(default_factory=LogConfig)
     source: str = "built-in default"  # "built-in default", "command line", or the file path
     state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
+    control: ControlConfig = field(default_factory=lambda: ControlConfig())
+
+
+@dataclass(frozen=True)
+class ControlConfig:
+    """The control endpoint (omsd.control): a Unix socket, owner-only, at ``socket`` (``None``:
+    none); ``explicit`` when the path was configured (then a path in use is a start-up error;
+    the default path in use only costs a warning: another omsd of this user has it); ``tcp``
+    only if configured (no network exposure by default)."""
+
+    socket: Path | None = field(default_factory=lambda: default_pty_link("control.sock"))
+    explicit: bool = False
+    tcp: TcpEndpoint | None = None
 
 
 class ConfigError(Exception):
@@ -445,7 +458,8 @@ _BOARD_KEYS = (
 _PTY_KEYS = ("link", "group", "mode")
 _LOG_KEYS = ("file", "view")
 _STATE_KEYS = ("file",)
-_TOP_KEYS = ("log", "state", "board")
+_CONTROL_KEYS = ("socket", "tcp")
+_TOP_KEYS = ("log", "state", "control", "board")
 _WORLD_FIELDS = typing.get_type_hints(AxisWorld)
 _WORLD_KEYS = tuple(f.name for f in fields(AxisWorld))
 _ENCODER_KEYS = ("encoder_counts_per_rev", "encoder_index")
@@ -714,7 +728,25 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
         raise at.key("board").expected("an array of tables, [[board]]", boards)
     parsed = [_board(b, at.key("board").index(i), i, base) for i, b in enumerate(boards)]
     _check_unique(parsed)
-    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state)
+    control = _control(document.get("control", {}), at.key("control"), base)
+    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state, control)
+
+
+def _control(value: object, at: _At, base: Path) -> ControlConfig:
+    """``[control] socket = "PATH"`` (or ``false``: no control endpoint), ``tcp = "[HOST:]PORT"``
+    (off unless given)."""
+    table = _table(value, at, _CONTROL_KEYS)
+    config = ControlConfig()
+    if "socket" in table:
+        raw = table["socket"]
+        if raw is False:
+            config = replace(config, socket=None, explicit=True)
+        else:
+            path = _path(raw, at.key("socket"), base)
+            config = replace(config, socket=path, explicit=True)
+    if "tcp" in table:
+        config = replace(config, tcp=_tcp(table["tcp"], at.key("tcp")))
+    return config
 
 
 def _log(value: object, at: _At, base: Path) -> LogConfig:
@@ -776,6 +808,16 @@ def from_options(
     return DaemonConfig((config,), LogConfig(file=log_file), "command line")
 
 
+def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConfig:
+    """``--control PATH`` (the control socket) or ``--control off``."""
+    if control is None:
+        return config
+    if control == "off":
+        return replace(config, control=replace(config.control, socket=None, explicit=True))
+    path = _path(control, _At("--control"), Path.cwd())
+    return replace(config, control=replace(config.control, socket=path, explicit=True))
+
+
 def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
     """``--state FILE`` on either form of the command line: the state file (relative to the
     working directory), in place of a file's ``[state] file``. ``None``: the configuration as
@@ -793,6 +835,7 @@ __all__ = [
     "DEFAULT_TCP_PORT",
     "BoardConfig",
     "ConfigError",
+    "ControlConfig",
     "DaemonConfig",
     "LogConfig",
     "PtyEndpoint",

@@ -19,6 +19,7 @@ from typing import Any, TextIO
 
 from omsd import sdnotify
 from omsd.config import DaemonConfig
+from omsd.control.server import ControlServer, EndpointInfo, SocketInUse
 from omsd.service import BoardService
 from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
@@ -94,6 +95,7 @@ class Daemon:
         self.endpoints: list[Endpoint] = []
         self._stop = asyncio.Event()
         self.saver: FlashSaver | None = None
+        self.control: ControlServer | None = None
 
     async def start(self) -> list[Endpoint]:
         loop = asyncio.get_running_loop()
@@ -137,10 +139,53 @@ class Daemon:
                             board.name, board.model, board.link, "pty", f"{pty.link} -> {device}"
                         )
                     )
+            await self._start_control()
         except BaseException:
             await self.stop(quiet=True)
             raise
         return self.endpoints
+
+    async def _start_control(self) -> None:
+        """The control endpoint: the Unix socket (owner-only), and TCP if configured. The
+        default socket path held by another live omsd of this user costs a warning, not the
+        start (that daemon keeps it); a configured one is an error."""
+        config = self.config.control
+        if config.socket is None and config.tcp is None:
+            return
+        services = {s.name: s for s in self.services}
+        control = ControlServer(services, self._endpoint_infos, self.log)
+        self.control = control
+        if config.socket is not None:
+            try:
+                await control.listen_unix(config.socket)
+            except SocketInUse:
+                if config.explicit:
+                    raise StartupError(
+                        f"control socket {config.socket} is in use by another process"
+                    ) from None
+                self.log.warning(
+                    f"control socket {config.socket} is in use by another omsd; this one has"
+                    " none (give it --control PATH)"
+                )
+            except OSError as exc:
+                reason = exc.strerror or str(exc)
+                raise StartupError(
+                    f"cannot create control socket {config.socket}: {reason}"
+                ) from None
+            else:
+                self.log.info(f"control socket {config.socket}")
+        if config.tcp is not None:
+            try:
+                host, port = await control.listen_tcp(config.tcp.host, config.tcp.port)
+            except OSError as exc:
+                reason = os.strerror(exc.errno) if exc.errno else str(exc)
+                raise StartupError(
+                    f"cannot listen on control tcp {config.tcp}: {reason.lower()}"
+                ) from None
+            self.log.info(f"control tcp {host}:{port}")
+
+    def _endpoint_infos(self) -> list[EndpointInfo]:
+        return [EndpointInfo(e.board, e.model, e.link, e.kind, e.address) for e in self.endpoints]
 
     def _load_state(self) -> StateFile | None:
         """The boards' flash: "a corrupt or missing state file gives the factory defaults and
@@ -200,6 +245,9 @@ class Daemon:
         self._stop.set()
 
     async def stop(self, quiet: bool = False) -> None:
+        if self.control is not None:
+            await self.control.close()
+            self.control = None
         for server in self.servers:
             server.close()
         for service in self.services:

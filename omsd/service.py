@@ -24,10 +24,15 @@ import traceback
 from typing import Protocol
 
 from omsd.board import Board
-from omsd.board.events import describe
+from omsd.board.events import Event, describe
 from omsd.config import BoardConfig
+from omsd.faults import Faults
 from omsd.link import Link, make_link
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
+from omsd.timebase import Timebase
+
+#: Host bytes a faulty cable holds in flight (paced or damaged) before it drops more.
+MAX_IN_FLIGHT = 64 * 1024
 
 
 class Client(Protocol):
@@ -44,6 +49,18 @@ class Client(Protocol):
         ...
 
 
+class Observer(Protocol):
+    """Someone watching a board (the MQTT bridge, a control client waiting for a condition)."""
+
+    def traffic(self, service: BoardService, record: Traffic) -> None: ...
+
+    def event(self, service: BoardService, when: float, event: Event) -> None: ...
+
+    def changed(self, service: BoardService) -> None:
+        """The board ran (a client wrote, a deadline came, the world or time was changed)."""
+        ...
+
+
 class BoardService:
     def __init__(
         self,
@@ -55,8 +72,15 @@ class BoardService:
         self.name = config.name
         self.loop = loop
         self.log = log
-        # the board runs on the loop's monotonic clock, so loop.call_at can wake it exactly
-        self.clock = loop.time
+        # the board runs on the loop's monotonic clock (so loop.call_at can wake it exactly)
+        # unless the control API pauses, steps or scales its time
+        self.timebase = Timebase(loop.time)
+        self.clock = self.timebase.now
+        self.faults = Faults()
+        self.observers: list[Observer] = []
+        self._inbound = bytearray()  # host bytes on a faulty cable, not yet at the board
+        self._in_timer: asyncio.TimerHandle | None = None
+        self._out_free_at = 0.0  # loop time the paced line is free again
         now = self.clock()
         self.model = config.personality()
         self.board = Board(self.model, now=now, world=dict(config.world))
@@ -97,14 +121,24 @@ class BoardService:
             if taken:
                 label = "(disconnected client)"
                 chunk = bytes(self._orphan[:taken])
-                self.log.record(Traffic(time.time(), self.name, label, Direction.IN, chunk))
+                self._record(Traffic(time.time(), self.name, label, Direction.IN, chunk))
             del self._orphan[:taken]
+
+    def _record(self, record: Traffic) -> None:
+        self.log.record(record)
+        for observer in list(self.observers):
+            observer.traffic(self, record)
 
     def feed(self, client: Client, data: bytes) -> int:
         """Bytes a client wrote; returns how many the link took (the client keeps the rest and
         stops reading until :meth:`Client.input_room` is called)."""
         if self._closed:
             return 0
+        faults = self.faults
+        if not faults.cable:
+            return len(data)  # into a cut cable: lost
+        if faults.damaging or faults.baud is not None:
+            return self._feed_faulty(client, data)
         self._feed_orphan()
         taken = 0
         if not self._orphan:  # a vanished client's bytes go first
@@ -112,11 +146,77 @@ class BoardService:
         if taken:
             self.active = client
             chunk = data[:taken]
-            self.log.record(Traffic(time.time(), self.name, client.label, Direction.IN, chunk))
+            self._record(Traffic(time.time(), self.name, client.label, Direction.IN, chunk))
         if taken < len(data) and client not in self._waiting:
             self._waiting.append(client)
         self.service()
         return taken
+
+    def _feed_faulty(self, client: Client, data: bytes) -> int:
+        """A noisy or slow cable: the bytes are on the wire (taken from the client), damaged,
+        and reach the board at the line's pace."""
+        self.active = client
+        room = MAX_IN_FLIGHT - len(self._inbound)
+        if room <= 0:
+            return 0  # the wire is full: the client waits (input_room when it drains)
+        data = data[:room]
+        self._record(Traffic(time.time(), self.name, client.label, Direction.IN, data))
+        self._inbound += self.faults.damage(data)
+        if client not in self._waiting:
+            self._waiting.append(client)
+        self._drain_inbound()
+        return len(data)
+
+    def _drain_inbound(self) -> None:
+        self._in_timer = None
+        if self._closed or not self._inbound:
+            return
+        cps = self.faults.chars_per_second
+        n = len(self._inbound) if cps is None else 1
+        taken = self.link.from_host(bytes(self._inbound[:n]), self.clock())
+        del self._inbound[:taken]
+        self.service()
+        if self._inbound:
+            delay = 1.0 / cps if cps is not None and taken else 0.005
+            self._in_timer = self.loop.call_later(delay, self._drain_inbound)
+
+    def _deliver(self, client: Client | None, data: bytes) -> None:
+        """Output on its way to the host, through whatever faults the cable has."""
+        faults = self.faults
+        if not faults.cable or client is None:
+            return
+        data = faults.damage(data)
+        if not data:
+            return
+        cps = faults.chars_per_second
+        if faults.latency <= 0.0 and cps is None:
+            client.send(data)
+            return
+        now = self.loop.time()
+        at = now + faults.latency
+        if cps is None:
+            self.loop.call_at(at, self._send_later, client, data)
+            return
+        for i in range(len(data)):  # one character at a time, at the line's pace
+            self._out_free_at = max(self._out_free_at, at) + 1.0 / cps
+            self.loop.call_at(self._out_free_at, self._send_later, client, data[i : i + 1])
+
+    def _send_later(self, client: Client, data: bytes) -> None:
+        if self._closed or not self.faults.cable:
+            return
+        if client in self.clients:
+            client.send(data)
+
+    def set_faults(self, faults: Faults) -> None:
+        """New cable faults; cutting the cable closes the TCP clients (they see EOF)."""
+        self.faults = faults
+        if not faults.cable:
+            self._inbound.clear()
+            for client in list(self.clients):
+                cut = getattr(client, "cut", None)
+                if cut is not None:
+                    cut()
+        self.service()
 
     # -- time -----------------------------------------------------------------------------------
 
@@ -133,12 +233,13 @@ class BoardService:
             return
         for event in out.events:
             self.log.event(time.time(), self.name, describe(event))
+            for observer in list(self.observers):
+                observer.event(self, now, event)
         if out.data:
             client = self.active
             label = client.label if client is not None else "(no client)"
-            self.log.record(Traffic(time.time(), self.name, label, Direction.OUT, out.data))
-            if client is not None:
-                client.send(out.data)
+            self._record(Traffic(time.time(), self.name, label, Direction.OUT, out.data))
+            self._deliver(client, out.data)
         if self._orphan:
             self._feed_orphan()
         if self._waiting and self.link.room() > 0:
@@ -152,14 +253,22 @@ class BoardService:
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        if not self._closed:
+            for observer in list(self.observers):
+                observer.changed(self)
         deadline = self.link.next_deadline()
         if deadline is None or self._closed:
             return
-        # loop.call_at takes the loop's clock, which is the board's clock here
-        self._timer = self.loop.call_at(max(deadline, self.loop.time()), self.service)
+        at = self.timebase.to_loop(deadline)
+        if at is None:  # time is paused: nothing happens by itself
+            return
+        self._timer = self.loop.call_at(max(at, self.loop.time()), self.service)
 
     def close(self) -> None:
         self._closed = True
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+        if self._in_timer is not None:
+            self._in_timer.cancel()
+            self._in_timer = None

@@ -42,6 +42,11 @@ class TcpClient(asyncio.Protocol):
         peer_text = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
         self.label = f"{self.endpoint} #{next(_serial)} ({peer_text})"
         service = self.service
+        if not service.faults.cable:  # control API: the cable is cut, nobody gets through
+            service.log.info(f"{service.name}: {self.label} closed: the cable is cut")
+            self.transport.close()
+            self.transport = None
+            return
         others = [c for c in service.clients if isinstance(c, TcpClient)]
         if others and self.policy == "refuse":
             service.log.warning(f"{service.name}: refused {self.label}: board busy")
@@ -138,6 +143,13 @@ class TcpClient(asyncio.Protocol):
     def close(self) -> None:
         if self.transport is not None:
             self.transport.close()
+
+    def cut(self) -> None:
+        """The cable was cut (control API): the client sees EOF; what it wrote and the board has
+        not taken is lost with the cable."""
+        self._pending = bytearray()
+        self.service.detach(self)
+        self.close()
 
 
 async def serve_tcp(

@@ -1,0 +1,238 @@
+"""The typed Python client of the control API (blocking; one socket per client).
+
+::
+
+    from omsd.control.client import Control
+
+    with Control() as ctl:                      # $XDG_RUNTIME_DIR/omsd/control.sock
+        ctl.set_limit("X", +1, True, board="xy")    # close X's positive limit switch
+        ctl.wait_done("X", board="xy")              # until X's done flag is set
+        ctl.state("xy")["axes"]["X"]["position"]
+
+Every method raises :class:`~omsd.control.protocol.ControlError` (one line) when the daemon
+refuses the operation, and :class:`OSError` when it cannot be reached.
+"""
+
+from __future__ import annotations
+
+import itertools
+import socket
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from omsd.config import default_pty_link
+from omsd.control.protocol import MAX_LINE, ControlError, decode, encode
+
+_UNSET: Any = object()
+
+
+def default_socket() -> Path:
+    """Where a daemon started without ``--control`` listens."""
+    return default_pty_link("control.sock")
+
+
+class Control:
+    def __init__(
+        self,
+        path: str | Path | None = None,
+        *,
+        tcp: tuple[str, int] | None = None,
+        timeout: float = 30.0,
+    ) -> None:
+        if tcp is not None:
+            self.sock = socket.create_connection(tcp, timeout=timeout)
+            self.address = f"{tcp[0]}:{tcp[1]}"
+        else:
+            target = Path(path) if path is not None else default_socket()
+            self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            self.sock.settimeout(timeout)
+            try:
+                self.sock.connect(str(target))
+            except OSError:
+                self.sock.close()
+                raise
+            self.address = str(target)
+        self.timeout = timeout
+        self._ids = itertools.count(1)
+        self._buffer = bytearray()
+
+    def __enter__(self) -> Control:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.sock.close()
+
+    # -- the wire -------------------------------------------------------------------------------
+
+    def call(self, op: str, *, reply_within: float | None = None, **args: Any) -> Any:
+        """Send one operation and return its result (``reply_within``: seconds to wait for
+        the reply, the client's timeout by default)."""
+        ident = next(self._ids)
+        request = {"id": ident, "op": op, **{k: v for k, v in args.items() if v is not _UNSET}}
+        self.sock.settimeout(reply_within if reply_within is not None else self.timeout)
+        self.sock.sendall(encode(request))
+        while True:
+            reply = decode(self._line())
+            if reply.get("id") != ident:
+                continue  # a reply to an earlier request given up on
+            if reply.get("ok"):
+                return reply.get("result")
+            raise ControlError(str(reply.get("error", "error")))
+
+    def _line(self) -> bytes:
+        while (end := self._buffer.find(b"\n")) < 0:
+            if len(self._buffer) > MAX_LINE:
+                raise ControlError("reply too long")
+            data = self.sock.recv(65536)
+            if not data:
+                raise ConnectionError(f"the daemon at {self.address} closed the connection")
+            self._buffer += data
+        line = bytes(self._buffer[:end])
+        del self._buffer[: end + 1]
+        return line
+
+    # -- looking --------------------------------------------------------------------------------
+
+    def boards(self) -> list[dict[str, Any]]:
+        """Every board: name, model, link and endpoints (kind, address)."""
+        result: list[dict[str, Any]] = self.call("boards")
+        return result
+
+    def state(self, board: str | None = None) -> dict[str, Any]:
+        """The board's full state: per axis position, encoder, velocity, flags and switches;
+        registers; queue space; the link's buffers; the clock and the cable's faults."""
+        result: dict[str, Any] = self.call("state", board=board)
+        return result
+
+    # -- the world ------------------------------------------------------------------------------
+
+    def set_limit(
+        self, axis: str, direction: int, active: bool | None = True, board: str | None = None
+    ) -> dict[str, Any]:
+        """Close (True) or open (False) a limit switch; None lets the carriage decide again."""
+        result: dict[str, Any] = self.call(
+            "limit", board=board, axis=axis, direction=direction, active=active
+        )
+        return result
+
+    def set_home(
+        self, axis: str, active: bool | None = True, board: str | None = None
+    ) -> dict[str, Any]:
+        result: dict[str, Any] = self.call("home", board=board, axis=axis, active=active)
+        return result
+
+    def set_input(self, bit: int, high: bool | None, board: str | None = None) -> dict[str, Any]:
+        """Drive a general-purpose input high or low; None releases it (pulled up)."""
+        result: dict[str, Any] = self.call("input", board=board, bit=bit, high=high)
+        return result
+
+    def slip(self, axis: str, steps: float, board: str | None = None) -> dict[str, Any]:
+        """The motor loses ``steps`` steps (the encoder sees it, the position counter not)."""
+        result: dict[str, Any] = self.call("slip", board=board, axis=axis, steps=steps)
+        return result
+
+    def stall(self, axis: str, stalled: bool = True, board: str | None = None) -> dict[str, Any]:
+        result: dict[str, Any] = self.call("stall", board=board, axis=axis, stalled=stalled)
+        return result
+
+    def encoder(self, axis: str, counts: int, board: str | None = None) -> dict[str, Any]:
+        """Turn an external encoder to ``counts`` (what ET tracks)."""
+        result: dict[str, Any] = self.call("encoder", board=board, axis=axis, counts=counts)
+        return result
+
+    # -- faults ---------------------------------------------------------------------------------
+
+    def fault(
+        self,
+        board: str | None = None,
+        *,
+        latency: float = _UNSET,
+        baud: int | None = _UNSET,
+        drop: float = _UNSET,
+        garble: float = _UNSET,
+        cable: bool = _UNSET,
+        seed: int = _UNSET,
+    ) -> dict[str, Any]:
+        """Change the cable's faults (those not given stay as they are); see
+        :mod:`omsd.faults`. Returns the faults now in force."""
+        result: dict[str, Any] = self.call(
+            "fault",
+            board=board,
+            latency=latency,
+            baud=baud,
+            drop=drop,
+            garble=garble,
+            cable=cable,
+            seed=seed,
+        )
+        return result
+
+    def cut_cable(self, board: str | None = None) -> dict[str, Any]:
+        return self.fault(board, cable=False)
+
+    def connect_cable(self, board: str | None = None) -> dict[str, Any]:
+        return self.fault(board, cable=True)
+
+    def clear_faults(self, board: str | None = None) -> dict[str, Any]:
+        return self.fault(board, latency=0.0, baud=None, drop=0.0, garble=0.0, cable=True)
+
+    # -- time and power -------------------------------------------------------------------------
+
+    def pause(self, board: str | None = None) -> dict[str, Any]:
+        result: dict[str, Any] = self.call("time", board=board, action="pause")
+        return result
+
+    def resume(self, board: str | None = None) -> dict[str, Any]:
+        result: dict[str, Any] = self.call("time", board=board, action="resume")
+        return result
+
+    def step(self, seconds: float, board: str | None = None) -> dict[str, Any]:
+        """Move a paused board's time ``seconds`` forward (all that happens in them happens)."""
+        result: dict[str, Any] = self.call("time", board=board, action="step", seconds=seconds)
+        return result
+
+    def scale(self, scale: float, board: str | None = None) -> dict[str, Any]:
+        """Board seconds per real second (0.001 to 1000)."""
+        result: dict[str, Any] = self.call("time", board=board, action="scale", scale=scale)
+        return result
+
+    def reset(self, board: str | None = None) -> dict[str, Any]:
+        """Power-cycle the board."""
+        result: dict[str, Any] = self.call("reset", board=board)
+        return result
+
+    # -- waiting --------------------------------------------------------------------------------
+
+    def _wait(self, board: str | None, timeout: float, **args: Any) -> dict[str, Any]:
+        result: dict[str, Any] = self.call(
+            "wait", reply_within=timeout + 5.0, board=board, timeout=timeout, **args
+        )
+        return result
+
+    def wait_done(
+        self, axis: str, timeout: float = 10.0, board: str | None = None
+    ) -> dict[str, Any]:
+        """Until the axis's done flag is set (ID, GD, GN ...); returns the state then."""
+        return self._wait(board, timeout, until="done", axis=axis)
+
+    def wait_idle(self, timeout: float = 10.0, board: str | None = None) -> dict[str, Any]:
+        """Until every axis is at rest with an empty queue."""
+        return self._wait(board, timeout, until="idle")
+
+    def wait_position(
+        self, axis: str, position: int, timeout: float = 10.0, board: str | None = None
+    ) -> dict[str, Any]:
+        """Until the axis's position counter reaches (or passes) ``position``."""
+        return self._wait(board, timeout, until="position", axis=axis, position=position)
+
+
+__all__ = ["Control", "ControlError", "default_socket"]

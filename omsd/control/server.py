@@ -1,0 +1,397 @@
+"""The daemon's side of the control API (protocol: :mod:`omsd.control.protocol`).
+
+It listens on a Unix socket, owner-only (mode 0600 in a directory it creates 0700), and on TCP
+only if configured. Each request runs as its own task, so a ``wait`` does not hold up the
+connection's other requests; a bad request gets a one-line error and the connection stays.
+Everything an operation does to a board goes through the board's world API and the service, at
+the board's own time (which the ``time`` operation may have paused or scaled).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import math
+import os
+import socket
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from omsd.board.events import Event
+from omsd.control.protocol import MAX_LINE, OPS, ControlError, decode, encode
+from omsd.faults import Faults
+from omsd.service import BoardService
+from omsd.telemetry.traffic import Traffic, TrafficLog
+
+DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
+MAX_WAIT = 3600.0
+POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
+
+
+@dataclass(frozen=True)
+class EndpointInfo:
+    board: str
+    model: str
+    link: str
+    kind: str
+    address: str
+
+
+class SocketInUse(Exception):
+    """The control socket's path is held by a live process."""
+
+
+class ControlServer:
+    def __init__(
+        self,
+        services: dict[str, BoardService],
+        endpoints: Callable[[], list[EndpointInfo]],
+        log: TrafficLog,
+    ) -> None:
+        self.services = services
+        self.endpoints = endpoints
+        self.log = log
+        self.servers: list[asyncio.Server] = []
+        self.paths: list[Path] = []
+        self._tasks: set[asyncio.Task[None]] = set()
+        self._writers: set[asyncio.StreamWriter] = set()
+
+    # -- listening ------------------------------------------------------------------------------
+
+    async def listen_unix(self, path: Path) -> None:
+        """Listen at ``path``; :class:`SocketInUse` if a live process holds it (a stale socket
+        file left by a killed daemon is replaced)."""
+        if path.exists() or path.is_symlink():
+            if _alive(path):
+                raise SocketInUse(str(path))
+            path.unlink()
+        if not path.parent.exists():
+            path.parent.mkdir(parents=True, mode=0o700, exist_ok=True)
+        old = os.umask(0o177)  # the socket is born 0600: no window for another user
+        try:
+            server = await asyncio.start_unix_server(self._connection, path, limit=MAX_LINE)
+        finally:
+            os.umask(old)
+        os.chmod(path, 0o600)
+        self.servers.append(server)
+        self.paths.append(path)
+
+    async def listen_tcp(self, host: str, port: int) -> tuple[str, int]:
+        server = await asyncio.start_server(self._connection, host, port, limit=MAX_LINE)
+        self.servers.append(server)
+        address = server.sockets[0].getsockname()
+        return str(address[0]), int(address[1])
+
+    async def close(self) -> None:
+        for server in self.servers:
+            server.close()
+        for writer in list(self._writers):
+            writer.close()
+        for task in list(self._tasks):
+            task.cancel()
+        for server in self.servers:
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(server.wait_closed(), timeout=2.0)
+        for path in self.paths:
+            with contextlib.suppress(OSError):
+                path.unlink()
+        self.servers.clear()
+        self.paths.clear()
+
+    # -- connections ----------------------------------------------------------------------------
+
+    async def _connection(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self._writers.add(writer)
+        lock = asyncio.Lock()
+        try:
+            while True:
+                try:
+                    line = await reader.readline()
+                except (ValueError, asyncio.LimitOverrunError):
+                    await self._send(
+                        writer, lock, {"id": None, "ok": False, "error": "line too long"}
+                    )
+                    break
+                except ConnectionError:
+                    break
+                if not line:
+                    break
+                if not line.strip():
+                    continue
+                task = asyncio.get_running_loop().create_task(self._request(line, writer, lock))
+                self._tasks.add(task)
+                task.add_done_callback(self._tasks.discard)
+        finally:
+            self._writers.discard(writer)
+            writer.close()
+
+    async def _request(self, line: bytes, writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
+        ident: object = None
+        try:
+            message = decode(line)
+            ident = message.get("id")
+            result = await self.run(message)
+            reply: dict[str, Any] = {"id": ident, "ok": True, "result": result}
+        except ControlError as exc:
+            reply = {"id": ident, "ok": False, "error": str(exc)}
+        except (TypeError, ValueError, KeyError) as exc:
+            reply = {"id": ident, "ok": False, "error": f"bad request: {exc}"}
+        await self._send(writer, lock, reply)
+
+    async def _send(
+        self, writer: asyncio.StreamWriter, lock: asyncio.Lock, reply: dict[str, Any]
+    ) -> None:
+        async with lock:
+            if writer.is_closing():
+                return
+            try:
+                writer.write(encode(reply))
+                await writer.drain()
+            except ConnectionError:
+                pass
+
+    # -- operations -----------------------------------------------------------------------------
+
+    async def run(self, message: dict[str, Any]) -> Any:
+        op = message.get("op")
+        if op not in OPS:
+            raise ControlError(f"unknown op {op!r}; known: {', '.join(OPS)}")
+        if op == "boards":
+            return self._boards()
+        service = self._service(message)
+        if op == "wait":
+            return await self._wait(service, message)
+        handler: Callable[[BoardService, dict[str, Any]], Any] = getattr(self, f"_op_{op}")
+        result = handler(service, message)
+        service.service()
+        return result if result is not None else self._state(service)
+
+    def _service(self, message: dict[str, Any]) -> BoardService:
+        name = message.get("board")
+        if name is None and len(self.services) == 1:
+            return next(iter(self.services.values()))
+        service = self.services.get(str(name))
+        if service is None:
+            raise ControlError(f"no board {name!r}; boards: {', '.join(self.services)}")
+        return service
+
+    def _boards(self) -> list[dict[str, Any]]:
+        out = []
+        endpoints = self.endpoints()
+        for name, service in self.services.items():
+            out.append(
+                {
+                    "name": name,
+                    "model": service.model.name,
+                    "link": service.config.link,
+                    "endpoints": [
+                        {"kind": e.kind, "address": e.address} for e in endpoints if e.board == name
+                    ],
+                }
+            )
+        return out
+
+    def _state(self, service: BoardService) -> dict[str, Any]:
+        now = service.clock()
+        state = service.board.snapshot(now)
+        link = service.link
+        state["board"] = service.name
+        state["clock"] = service.timebase.describe()
+        state["faults"] = service.faults.as_dict()
+        state["link"] = {
+            "kind": service.config.link,
+            "room": link.room(),
+            "pending": getattr(link, "pending", None),
+            "waiting": getattr(link, "waiting", None),
+        }
+        state["clients"] = [c.label for c in service.clients]
+        return state
+
+    def _op_state(self, service: BoardService, m: dict[str, Any]) -> Any:
+        return self._state(service)
+
+    @staticmethod
+    def _axis(service: BoardService, m: dict[str, Any]) -> str:
+        letter = str(m.get("axis", "")).upper()
+        if service.board.axis_by_letter(letter) is None:
+            axes = service.model.axes
+            raise ControlError(f"{service.name} has no axis {letter!r}; axes: {axes}")
+        return letter
+
+    @staticmethod
+    def _flag(m: dict[str, Any], key: str) -> bool | None:
+        value = m.get(key)
+        if value is not None and not isinstance(value, bool):
+            raise ControlError(f"{key}: expected true, false or null, got {value!r}")
+        return value
+
+    def _op_limit(self, service: BoardService, m: dict[str, Any]) -> Any:
+        direction = m.get("direction")
+        if direction in ("+", "positive"):
+            direction = 1
+        elif direction in ("-", "negative"):
+            direction = -1
+        if direction not in (1, -1):
+            raise ControlError(f"direction: expected +1 or -1, got {direction!r}")
+        axis = self._axis(service, m)
+        service.board.set_limit(axis, int(direction), self._flag(m, "active"), service.clock())
+        return None
+
+    def _op_home(self, service: BoardService, m: dict[str, Any]) -> Any:
+        axis = self._axis(service, m)
+        service.board.set_home(axis, self._flag(m, "active"), service.clock())
+        return None
+
+    def _op_input(self, service: BoardService, m: dict[str, Any]) -> Any:
+        bit = m.get("bit")
+        if not isinstance(bit, int) or not 0 <= bit < service.model.io_bits:
+            raise ControlError(f"bit: expected 0..{service.model.io_bits - 1}, got {bit!r}")
+        service.board.set_input(bit, self._flag(m, "high"), service.clock())
+        return None
+
+    def _op_slip(self, service: BoardService, m: dict[str, Any]) -> Any:
+        steps = _number(m, "steps")
+        service.board.inject_slip(self._axis(service, m), steps, service.clock())
+        return None
+
+    def _op_stall(self, service: BoardService, m: dict[str, Any]) -> Any:
+        stalled = self._flag(m, "stalled")
+        service.board.set_stall(self._axis(service, m), bool(stalled), service.clock())
+        return None
+
+    def _op_encoder(self, service: BoardService, m: dict[str, Any]) -> Any:
+        counts = int(_number(m, "counts"))
+        service.board.set_encoder_input(self._axis(service, m), counts, service.clock())
+        return None
+
+    def _op_fault(self, service: BoardService, m: dict[str, Any]) -> Any:
+        settings: dict[str, Any] = asdict(service.faults)
+        settings.pop("_random", None)
+        for key in ("latency", "baud", "drop", "garble", "cable", "seed"):
+            if key in m:
+                settings[key] = m[key]
+        try:
+            faults = Faults(**settings)
+        except (TypeError, ValueError) as exc:
+            raise ControlError(str(exc)) from None
+        was = service.faults.cable
+        service.set_faults(faults)
+        if was != faults.cable:
+            self.log.warning(f"{service.name}: cable {'reconnected' if faults.cable else 'cut'}")
+        return faults.as_dict()
+
+    def _op_time(self, service: BoardService, m: dict[str, Any]) -> Any:
+        clock = service.timebase
+        action = m.get("action")
+        try:
+            if action == "pause":
+                service.service()  # the board catches up to the moment of the pause
+                clock.pause()
+            elif action == "resume":
+                clock.resume()
+            elif action == "step":
+                clock.step(_number(m, "seconds"))
+            elif action == "scale":
+                clock.set_scale(_number(m, "scale"))
+            else:
+                raise ControlError(f"action: expected pause, resume, step or scale, got {action!r}")
+        except ValueError as exc:
+            raise ControlError(str(exc)) from None
+        return None
+
+    def _op_reset(self, service: BoardService, m: dict[str, Any]) -> Any:
+        service.board.power_cycle(service.clock())
+        self.log.warning(f"{service.name}: power cycled (control API)")
+        return None
+
+    # -- waiting --------------------------------------------------------------------------------
+
+    async def _wait(self, service: BoardService, m: dict[str, Any]) -> Any:
+        until = m.get("until")
+        timeout = float(m.get("timeout", DEFAULT_WAIT))
+        if not 0.0 <= timeout <= MAX_WAIT:
+            raise ControlError(f"timeout: expected 0 to {MAX_WAIT} s, got {timeout}")
+        check = self._condition(service, m, until)
+        woken = asyncio.Event()
+        watcher = _Watcher(woken)
+        service.observers.append(watcher)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        try:
+            while True:
+                service.service()
+                if check():
+                    return self._state(service)
+                left = deadline - loop.time()
+                if left <= 0:
+                    raise ControlError(f"timed out after {timeout:g} s waiting for {until}")
+                woken.clear()
+                poll = POSITION_POLL if until == "position" else left
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(woken.wait(), timeout=min(left, max(poll, 0.001)))
+        finally:
+            service.observers.remove(watcher)
+
+    def _condition(
+        self, service: BoardService, m: dict[str, Any], until: object
+    ) -> Callable[[], bool]:
+        board = service.board
+        if until == "idle":
+            # every axis at rest with nothing queued
+            return lambda: all(not a.moving and a.queue.empty for a in board.axes)
+        axis = board.axis_by_letter(self._axis(service, m))
+        assert axis is not None
+        if until == "done":
+            return lambda: axis.done
+        if until == "position":
+            target = _number(m, "position")
+            start = axis.counter(service.clock())
+            side = math.copysign(1.0, target - start) if target != start else 0.0
+
+            def reached() -> bool:
+                here = axis.counter(service.clock())
+                return here == target or (side != 0.0 and (here - target) * side >= 0)
+
+            return reached
+        raise ControlError(f"until: expected done, idle or position, got {until!r}")
+
+
+class _Watcher:
+    """Wakes a waiter whenever the board has run."""
+
+    def __init__(self, woken: asyncio.Event) -> None:
+        self.woken = woken
+
+    def traffic(self, service: BoardService, record: Traffic) -> None:
+        pass
+
+    def event(self, service: BoardService, when: float, event: Event) -> None:
+        self.woken.set()
+
+    def changed(self, service: BoardService) -> None:
+        self.woken.set()
+
+
+def _number(m: dict[str, Any], key: str) -> float:
+    value = m.get(key)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ControlError(f"{key}: expected a number, got {value!r}")
+    return float(value)
+
+
+def _alive(path: Path) -> bool:
+    """Whether a process listens at the Unix socket ``path``."""
+    probe = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    probe.settimeout(0.5)
+    try:
+        probe.connect(str(path))
+    except OSError:
+        return False
+    finally:
+        probe.close()
+    return True
+
+
+__all__ = ["ControlServer", "EndpointInfo", "SocketInUse"]
