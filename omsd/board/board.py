@@ -159,8 +159,11 @@ class Board:
         Control-D (kill) and Control-Y (clear flags) bypass the interpreter."""
         self.advance(now)
         interp = self.interpreter
+        buffer = interp.buffer
         taken = 0
-        for b in data:
+        n = len(data)
+        while taken < n:
+            b = data[taken]
             if b in (CONTROL_D, CONTROL_Y):
                 interp.pump(now)
                 if not interp.room():
@@ -171,13 +174,21 @@ class Board:
                     interp.clear_flags()
                 taken += 1
                 continue
-            if not interp.room():
+            room = interp.capacity - len(buffer)
+            if room <= 0:
                 interp.pump(now)
                 self.settle(now)
-                if not interp.room():
+                room = interp.capacity - len(buffer)
+                if room <= 0:
                     break
-            interp.accept(b)
-            taken += 1
+            # as many characters as there is room for, up to the next control character
+            chunk = data[taken : taken + room]
+            for control in (CONTROL_D, CONTROL_Y):
+                cut = chunk.find(control)
+                if cut >= 0:
+                    chunk = chunk[:cut]
+            buffer.extend(chunk)
+            taken += len(chunk)
         interp.pump(now)
         self.settle(now)
         self.advance(now)

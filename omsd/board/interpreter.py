@@ -33,7 +33,25 @@ if TYPE_CHECKING:
     from omsd.board.queue import Op
 
 MAX_LOOP_DEPTH = 4
+
+# Commands that only report or select an axis: they queue nothing, so the axes need not be run
+# after them (the interpreter's hot path: a client polling QA/RP).
+_REPORTS = frozenset(
+    {
+        *("RP", "RE", "RA", "QA", "QI", "RI", "RV", "RC", "RU", "RQ", "WY", "BX", "EA", "RL"),
+        *("PP", "PE", "QL", "#WS", "PM", "EG?", "PS?", "LT?", "CL?", "?PS"),
+        *("AX", "AY", "AZ", "AT", "AU", "AV", "AR", "AS", "AM"),
+        *(f"?{a}{b}" for a in "ABCDEFGHIJKLMNOPQRSTUVWXYZ" for b in "ABCDEFGHIJKLMNOPQRSTUVWXYZ"),
+    }
+)
 MAX_MACRO_DEPTH = 8
+
+
+class _SyntaxTable(dict[str, Syntax]):
+    """Mnemonic -> syntax, UNKNOWN for anything else (looked up for every letter received)."""
+
+    def __missing__(self, key: str) -> Syntax:
+        return Syntax.UNKNOWN
 
 
 def _syntax(spec: CommandSpec) -> Syntax:
@@ -103,8 +121,9 @@ class Interpreter:
         self.capacity = board.model.input_buffer
         self.commands = dialect.commands(board.model)
         self.handlers = dialect.handlers(board.model)
-        self._syntax = {m: _syntax(spec) for m, spec in self.commands.items()}
+        self._syntax = _SyntaxTable({m: _syntax(spec) for m, spec in self.commands.items()})
         self.lexer = self._lexer()
+        self._bare = self.lexer.bare_pairs(list(self.commands))
         self.pending: deque[tuple[Token, int]] = deque()  # with the macro depth it came from
         self.macros = MacroStore()
         self.reset()
@@ -112,8 +131,8 @@ class Interpreter:
     def _lexer(self) -> Lexer:
         if self.board.model.dialect == "pcix":
             starts = dialect.prefixes(self.commands)
-            return Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN), starts.__contains__)
-        return Lexer(lambda m: self._syntax.get(m, Syntax.UNKNOWN))
+            return Lexer(self._syntax.__getitem__, starts.__contains__)
+        return Lexer(self._syntax.__getitem__)
 
     def reset(self) -> None:
         """RS and power-up: interpreter state to defaults (the input buffer is kept)."""
@@ -186,20 +205,45 @@ class Interpreter:
                 if not self._dispatch(token, t):
                     self.pending.appendleft((token, depth))
                     return progressed
-                for axis in board.axes:
-                    board.executor.step(axis, t)
+                # let the axes run what was queued before the next command is read; a report or
+                # an axis selection queues nothing and leaves them as they were
+                if not isinstance(token, Command) or token.mnemonic not in _REPORTS:
+                    for axis in board.axes:
+                        board.executor.step(axis, t)
                 progressed = True
                 continue
-            if not self.buffer:
+            buffer = self.buffer
+            if not buffer:
                 return progressed
-            b = self.buffer.popleft()
-            if self.echo:
-                board.reply(bytes([b]), t)
             progressed = True
-            if self.capture is not None:
-                self._capture(b, t)
+            if self.echo or self.capture is not None:
+                b = buffer.popleft()
+                if self.echo:
+                    board.reply(bytes([b]), t)
+                if self.capture is not None:
+                    self._capture(b, t)
+                    continue
+                tokens = self.lexer.feed(b)
+                if tokens:
+                    self.pending.extend((token, 0) for token in tokens)
                 continue
-            self.pending.extend((token, 0) for token in self.lexer.feed(b))
+            # the common case, in a tight loop: characters until one completes a command; an
+            # operand-less two-letter command between commands (QA, RP ...) is taken whole
+            lexer = self.lexer
+            feed = lexer.feed
+            bare = self._bare
+            while buffer:
+                if len(buffer) >= 2 and lexer.between_commands:
+                    command = bare.get((buffer[0], buffer[1]))
+                    if command is not None:
+                        buffer.popleft()
+                        buffer.popleft()
+                        self.pending.append((command, 0))
+                        break
+                tokens = feed(buffer.popleft())
+                if tokens:
+                    self.pending.extend((token, 0) for token in tokens)
+                    break
 
     def _capture(self, b: int, t: float) -> None:
         """PCIx MD: "Enter the commands ... then enter a control Z to end the macro definition.

@@ -130,6 +130,27 @@ class Lexer:
         """True when no command is partly received."""
         return self._state in (_State.IDLE, _State.SWALLOW)
 
+    @property
+    def between_commands(self) -> bool:
+        """True when the next character starts afresh (not inside a command or a bad word)."""
+        return self._state is _State.IDLE
+
+    def bare_pairs(self, mnemonics: list[str]) -> dict[tuple[int, int], Command]:
+        """For a fast path: the two-character spellings (any case) of the operand-less
+        two-letter mnemonics that begin no longer one, each with the command it is. Fed to an
+        idle lexer, such a pair gives exactly that command and leaves the lexer idle."""
+        out: dict[tuple[int, int], Command] = {}
+        for m in mnemonics:
+            if len(m) != 2 or not m.isalpha() or self._syntax(m) is not Syntax.BARE:
+                continue
+            if self._prefix(m):
+                continue
+            command = Command(m, None, m)
+            for a in {m[0].upper(), m[0].lower()}:
+                for b in {m[1].upper(), m[1].lower()}:
+                    out[(ord(a), ord(b))] = command
+        return out
+
     def feed(self, b: int) -> list[Token]:
         out: list[Token] = []
         self._step(b, out)
@@ -172,16 +193,20 @@ class Lexer:
     def _more(self, b: int, out: list[Token]) -> None:
         word = self._word
         extends = _is_letter(b) or b == 0x3F  # a letter, or the ? of "EG?"
-        candidate = word + chr(b).upper() if extends else ""
-        if candidate and (self._syntax(candidate) is not Syntax.UNKNOWN or self._prefix(candidate)):
-            self._word = candidate
-            self._raw.append(b)
-            if self._syntax(candidate) is not Syntax.UNKNOWN and not self._prefix(candidate):
-                self._complete(candidate, out)
-            return
-        if self._syntax(word) is not Syntax.UNKNOWN:
+        if extends:
+            candidate = word + chr(b).upper()
+            syntax = self._syntax(candidate)
+            longer = self._prefix(candidate)
+            if syntax is not Syntax.UNKNOWN or longer:
+                self._word = candidate
+                self._raw.append(b)
+                if syntax is not Syntax.UNKNOWN and not longer:
+                    self._complete(candidate, out, syntax)
+                return
+        syntax = self._syntax(word)
+        if syntax is not Syntax.UNKNOWN:
             # a complete mnemonic that could have been the start of a longer one, and is not
-            self._complete(word, out)
+            self._complete(word, out, syntax)
             self._step(b, out)
             return
         if not self._swallowing:
@@ -194,8 +219,7 @@ class Lexer:
             self._state = _State.SWALLOW
             self._step(b, out)
 
-    def _complete(self, mnemonic: str, out: list[Token]) -> None:
-        syntax = self._syntax(mnemonic)
+    def _complete(self, mnemonic: str, out: list[Token], syntax: Syntax) -> None:
         self._swallowing = False
         if syntax is Syntax.BARE:
             out.append(Command(mnemonic, None, mnemonic))
