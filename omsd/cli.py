@@ -4,7 +4,8 @@
 ``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file; ``--config FILE``
 describes several. ``--state FILE`` keeps the boards' flash memory (AP defaults, permanent
 macros) across restarts, with either form. ``omsd models`` lists the personalities; ``omsd
-console`` talks to one board on this terminal without serving it.
+console`` talks to one board on this terminal without serving it; ``omsd ctl`` reaches behind
+the boards of a running daemon (:mod:`omsd.ctl`, which has its own options and exit statuses).
 
 Exit status: 0 after a clean stop, 2 for a configuration error, 1 when the daemon cannot start
 (a port in use, a pty link that cannot be made). Errors are one line on standard error.
@@ -77,11 +78,22 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("models", help="list the board personalities")
     console = sub.add_parser("console", help="talk to one board on this terminal")
     console.add_argument("--board", dest="console_board", default=DEFAULT_MODEL, metavar="MODEL")
+    # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
+    ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
+    ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["ctl"]:
+        from omsd.ctl import main as ctl_main
+
+        return ctl_main(argv[1:])
     args = _parser().parse_args(argv)
+    if args.command == "ctl":
+        print("omsd: ctl must come first: omsd ctl [OPTIONS] COMMAND", file=sys.stderr)
+        return 2
     if args.command == "models":
         for model in MODELS.values():
             print(f"{model.name:<10} {model.description}")

@@ -11,6 +11,10 @@ world (``config/omsd.toml`` shows and explains every key)::
     [state]
     file = "/var/lib/omsd/omsd.state"      # the boards' flash memory (relative: to this file)
 
+    [mqtt]                                 # the MQTT bridge (omsd.mqtt): off without this table
+    host = "broker.lab"                    # required; port 1883 (8883 with tls) unless given
+    prefix = "omsd"                        # topics <prefix>/status, <prefix>/<board>/...
+
     [[board]]
     name = "xy-stage"          # [A-Za-z0-9_.-]+, default board1, board2, ...
     model = "PC48-4E"          # any personality of `omsd models`, case-insensitive
@@ -95,6 +99,9 @@ DEFAULT_PTY_MODE = 0o660
 LINKS = ("driver", "raw")
 SECOND_CLIENT_POLICIES = ("takeover", "refuse")
 VIEWS = ("auto", "rich", "plain", "off")
+MQTT_PORT = 1883  # IANA "mqtt"
+MQTTS_PORT = 8883  # IANA "secure-mqtt"
+MAX_STATE_RATE = 1000.0  # state publications per second per board, at most
 
 
 # -- the configuration --------------------------------------------------------------------------
@@ -178,6 +185,7 @@ class DaemonConfig:
     source: str = "built-in default"  # "built-in default", "command line", or the file path
     state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
     control: ControlConfig = field(default_factory=lambda: ControlConfig())
+    mqtt: MqttConfig | None = None  # the MQTT bridge (omsd.mqtt); None: off
 
 
 @dataclass(frozen=True)
@@ -190,6 +198,29 @@ class ControlConfig:
     socket: Path | None = field(default_factory=lambda: default_pty_link("control.sock"))
     explicit: bool = False
     tcp: TcpEndpoint | None = None
+
+
+@dataclass(frozen=True)
+class MqttConfig:
+    """The MQTT bridge (:mod:`omsd.mqtt`), on only when ``[mqtt]`` is given.
+
+    ``tls`` is ``False`` (plain TCP), ``True`` (TLS, the system's CA certificates) or the path of
+    a CA file to verify the broker with. ``port`` defaults to 1883, or 8883 with TLS (the
+    IANA ports "mqtt" and "secure-mqtt"). ``client_id`` ``None`` lets the client library make
+    one up. ``state_rate`` bounds the retained state publications per second per board while
+    its axes move; ``traffic`` turns the traffic topic off.
+    """
+
+    host: str
+    port: int = MQTT_PORT
+    username: str | None = None
+    password: str | None = None
+    tls: bool | Path = False
+    client_id: str | None = None
+    prefix: str = "omsd"
+    keepalive: int = 60
+    state_rate: float = 10.0
+    traffic: bool = True
 
 
 class ConfigError(Exception):
@@ -459,7 +490,19 @@ _PTY_KEYS = ("link", "group", "mode")
 _LOG_KEYS = ("file", "view")
 _STATE_KEYS = ("file",)
 _CONTROL_KEYS = ("socket", "tcp")
-_TOP_KEYS = ("log", "state", "control", "board")
+_MQTT_KEYS = (
+    "host",
+    "port",
+    "username",
+    "password",
+    "tls",
+    "client_id",
+    "prefix",
+    "keepalive",
+    "state_rate",
+    "traffic",
+)
+_TOP_KEYS = ("log", "state", "control", "mqtt", "board")
 _WORLD_FIELDS = typing.get_type_hints(AxisWorld)
 _WORLD_KEYS = tuple(f.name for f in fields(AxisWorld))
 _ENCODER_KEYS = ("encoder_counts_per_rev", "encoder_index")
@@ -729,7 +772,8 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
     parsed = [_board(b, at.key("board").index(i), i, base) for i, b in enumerate(boards)]
     _check_unique(parsed)
     control = _control(document.get("control", {}), at.key("control"), base)
-    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state, control)
+    mqtt = _mqtt(document["mqtt"], at.key("mqtt"), base) if "mqtt" in document else None
+    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state, control, mqtt)
 
 
 def _control(value: object, at: _At, base: Path) -> ControlConfig:
@@ -747,6 +791,92 @@ def _control(value: object, at: _At, base: Path) -> ControlConfig:
     if "tcp" in table:
         config = replace(config, tcp=_tcp(table["tcp"], at.key("tcp")))
     return config
+
+
+_TOPIC_LEVEL = re.compile(r"[^/+#\x00]+")
+
+
+def _mqtt(value: object, at: _At, base: Path) -> MqttConfig:
+    """``[mqtt]``: the bridge is on when the table is there, and then ``host`` is required (a
+    broker is never guessed: a bridge quietly publishing to a localhost broker nobody meant
+    is worse than an error)."""
+    table = _table(value, at, _MQTT_KEYS)
+    if "host" not in table:
+        raise at.key("host").error("expected the broker's host name or address, got none")
+    host = table["host"]
+    if not isinstance(host, str) or not (
+        _is_address(host.strip("[]"))
+        or (_HOSTNAME.fullmatch(host) and not re.fullmatch(r"[0-9.]+", host))
+    ):
+        raise at.key("host").expected("a host name or address", host)
+    tls: bool | Path = False
+    if "tls" in table:
+        raw = table["tls"]
+        if isinstance(raw, bool):
+            tls = raw
+        elif isinstance(raw, str):
+            tls = _path(raw, at.key("tls"), base)
+            if not tls.is_file():
+                raise at.key("tls").expected("true, false or a CA certificate file", str(tls))
+        else:
+            raise at.key("tls").expected("true, false or a CA certificate file", raw)
+    default_port = MQTT_PORT if tls is False else MQTTS_PORT
+    port = _integer(table.get("port", default_port), at.key("port"), 1, 65535)
+    username = password = None
+    if "username" in table:
+        username = _string(table["username"], at.key("username"))
+    if "password" in table:
+        if username is None:
+            raise at.key("password").error("expected a username with the password, got none")
+        raw = table["password"]
+        if not isinstance(raw, str):
+            raise at.key("password").error("expected a string (the value given is not shown)")
+        password = raw
+    client_id = None
+    if "client_id" in table:
+        client_id = _string(table["client_id"], at.key("client_id"))
+        if "\x00" in client_id or len(client_id.encode()) > 65535:
+            raise at.key("client_id").expected("an MQTT client identifier", client_id)
+    prefix = table.get("prefix", "omsd")
+    if (
+        not isinstance(prefix, str)
+        or prefix.startswith("$")
+        or not all(_TOPIC_LEVEL.fullmatch(level) for level in prefix.split("/"))
+    ):
+        raise at.key("prefix").expected(
+            "topic levels joined by '/', without '+', '#', empty levels or a leading '$'", prefix
+        )
+    keepalive = _integer(table.get("keepalive", 60), at.key("keepalive"), 1, 65535)
+    rate = table.get("state_rate", 10.0)
+    if (
+        isinstance(rate, bool)
+        or not isinstance(rate, int | float)
+        or not 0 < rate <= MAX_STATE_RATE
+    ):
+        raise at.key("state_rate").expected(
+            f"publications per second, above 0 and at most {MAX_STATE_RATE:g}", rate
+        )
+    traffic = _boolean(table.get("traffic", True), at.key("traffic"), "true or false")
+    return MqttConfig(
+        host=host.strip("[]"),
+        port=port,
+        username=username,
+        password=password,
+        tls=tls,
+        client_id=client_id,
+        prefix=prefix,
+        keepalive=keepalive,
+        state_rate=float(rate),
+        traffic=traffic,
+    )
+
+
+def _is_address(host: str) -> bool:
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return True
 
 
 def _log(value: object, at: _At, base: Path) -> LogConfig:
@@ -838,6 +968,7 @@ __all__ = [
     "ControlConfig",
     "DaemonConfig",
     "LogConfig",
+    "MqttConfig",
     "PtyEndpoint",
     "TcpEndpoint",
     "default_config",

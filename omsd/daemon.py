@@ -12,10 +12,11 @@ import contextlib
 import copy
 import os
 import signal
+import ssl
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from omsd import sdnotify
 from omsd.config import DaemonConfig
@@ -25,6 +26,9 @@ from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport.pty import PtyEndpoint
 from omsd.transport.tcp import serve_tcp
+
+if TYPE_CHECKING:
+    from omsd.mqtt import MqttBridge
 
 
 class StartupError(Exception):
@@ -96,6 +100,7 @@ class Daemon:
         self._stop = asyncio.Event()
         self.saver: FlashSaver | None = None
         self.control: ControlServer | None = None
+        self.mqtt: MqttBridge | None = None
 
     async def start(self) -> list[Endpoint]:
         loop = asyncio.get_running_loop()
@@ -140,6 +145,13 @@ class Daemon:
                         )
                     )
             await self._start_control()
+            self._start_mqtt()
+            # the endpoint lines go out last: whoever reads them may use the control socket at
+            # once, and a daemon that fails to start has announced nothing
+            for announced in self.endpoints:
+                self.out.write(announced.line() + "\n")
+                self.log.info(f"serving {announced.line()}")
+            self.out.flush()
         except BaseException:
             await self.stop(quiet=True)
             raise
@@ -184,6 +196,25 @@ class Daemon:
                 ) from None
             self.log.info(f"control tcp {host}:{port}")
 
+    def _start_mqtt(self) -> None:
+        """The MQTT bridge (omsd.mqtt), if ``[mqtt]`` is configured, once the boards are up. It
+        connects in the background: a broker that is down delays nothing here (issue 6: "A
+        broker that is down or goes away never stops or slows the boards"). Its commands run
+        through a ControlServer of their own, so they work with the control socket off."""
+        config = self.config.mqtt
+        if config is None:
+            return
+        from omsd.mqtt import MqttBridge  # a daemon without [mqtt] never loads the client
+
+        services = {s.name: s for s in self.services}
+        control = ControlServer(services, self._endpoint_infos, self.log)
+        try:
+            bridge = MqttBridge(config, list(self.services), control, self.log)
+        except (ssl.SSLError, OSError) as exc:
+            raise StartupError(f"mqtt: cannot set up TLS with {config.tls}: {exc}") from None
+        bridge.start()
+        self.mqtt = bridge
+
     def _endpoint_infos(self) -> list[EndpointInfo]:
         return [EndpointInfo(e.board, e.model, e.link, e.kind, e.address) for e in self.endpoints]
 
@@ -218,9 +249,6 @@ class Daemon:
 
     def _announce(self, endpoint: Endpoint) -> None:
         self.endpoints.append(endpoint)
-        self.out.write(endpoint.line() + "\n")
-        self.out.flush()
-        self.log.info(f"serving {endpoint.line()}")
 
     async def run(self) -> None:
         """Serve until SIGTERM/SIGINT (or :meth:`request_stop`)."""
@@ -245,6 +273,9 @@ class Daemon:
         self._stop.set()
 
     async def stop(self, quiet: bool = False) -> None:
+        if self.mqtt is not None:  # first: "offline" goes out while the boards still run
+            await self.mqtt.stop()
+            self.mqtt = None
         if self.control is not None:
             await self.control.close()
             self.control = None

@@ -313,7 +313,10 @@ def test_empty_endpoint_list_is_allowed_beside_the_other_kind(tmp_path: Path) ->
 
 FILE_ERRORS = [
     # unknown keys anywhere, with the allowed ones
-    ("colour = 1\n" + MINIMAL, "colour: unknown key; expected one of log, state, control, board"),
+    (
+        "colour = 1\n" + MINIMAL,
+        "colour: unknown key; expected one of log, state, control, mqtt, board",
+    ),
     (
         MINIMAL + "modle = 'PC48-4'\n",
         "board[0].modle: unknown key (did you mean 'model'?); expected one of name, model,",

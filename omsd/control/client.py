@@ -81,7 +81,13 @@ class Control:
         self.sock.settimeout(reply_within if reply_within is not None else self.timeout)
         self.sock.sendall(encode(request))
         while True:
-            reply = decode(self._line())
+            try:
+                reply = decode(self._line())
+            except ControlError:
+                # something else listens there (a board's data port, say): not the daemon
+                raise ConnectionError(
+                    f"{self.address} is not an omsd control endpoint (its reply is not JSON)"
+                ) from None
             if reply.get("id") != ident:
                 continue  # a reply to an earlier request given up on
             if reply.get("ok"):
@@ -136,7 +142,8 @@ class Control:
         return result
 
     def slip(self, axis: str, steps: float, board: str | None = None) -> dict[str, Any]:
-        """The motor loses ``steps`` steps (the encoder sees it, the position counter not)."""
+        """The carriage slips ``steps`` steps against the motor: the encoder (and the switches)
+        see the carriage move, the position counter does not."""
         result: dict[str, Any] = self.call("slip", board=board, axis=axis, steps=steps)
         return result
 
@@ -231,7 +238,8 @@ class Control:
     def wait_position(
         self, axis: str, position: int, timeout: float = 10.0, board: str | None = None
     ) -> dict[str, Any]:
-        """Until the axis's position counter reaches (or passes) ``position``."""
+        """Until the axis's position counter reaches (or passes) ``position``; an axis still
+        on a motion that has already carried it past ``position`` has reached it."""
         return self._wait(board, timeout, until="position", axis=axis, position=position)
 
 

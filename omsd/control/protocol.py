@@ -18,7 +18,7 @@ limit      board, axis, direction (+1 / -1), active (true, false, null = follow 
            carriage)                                                                 the axis
 home       board, axis, active (true / false / null)
 input      board, bit, high (true / false / null = released, pulled up)
-slip       board, axis, steps (the motor loses that many steps)
+slip       board, axis, steps (the carriage slips that many steps)
 stall      board, axis, stalled (true / false)
 encoder    board, axis, counts (external encoder input; ET tracking)
 fault      board, any of latency, baud, drop, garble, cable, seed                    the faults

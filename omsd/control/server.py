@@ -170,8 +170,10 @@ class ControlServer:
 
     def _service(self, message: dict[str, Any]) -> BoardService:
         name = message.get("board")
-        if name is None and len(self.services) == 1:
-            return next(iter(self.services.values()))
+        if name is None:
+            if len(self.services) == 1:
+                return next(iter(self.services.values()))
+            raise ControlError(f"several boards: say which ({', '.join(self.services)})")
         service = self.services.get(str(name))
         if service is None:
             raise ControlError(f"no board {name!r}; boards: {', '.join(self.services)}")
@@ -198,7 +200,15 @@ class ControlServer:
         state = service.board.snapshot(now)
         link = service.link
         state["board"] = service.name
-        state["clock"] = service.timebase.describe()
+        # the clock as of this snapshot, and the board's sample grid (PC48 §1.2: the velocity
+        # is calculated "2048 times each second"; the grid starts at power-up): with them a
+        # manual-clock Board started at ``origin`` reproduces this board exactly
+        state["clock"] = {
+            **service.timebase.describe(),
+            "now": now,
+            "origin": service.board.clock.origin,
+            "rate": service.board.clock.rate,
+        }
         state["faults"] = service.faults.as_dict()
         state["link"] = {
             "kind": service.config.link,
@@ -269,9 +279,24 @@ class ControlServer:
     def _op_fault(self, service: BoardService, m: dict[str, Any]) -> Any:
         settings: dict[str, Any] = asdict(service.faults)
         settings.pop("_random", None)
-        for key in ("latency", "baud", "drop", "garble", "cable", "seed"):
+        for key in ("latency", "drop", "garble"):
             if key in m:
-                settings[key] = m[key]
+                settings[key] = _number(m, key)
+        if "baud" in m:
+            baud = m["baud"]
+            if baud is not None and (isinstance(baud, bool) or not isinstance(baud, int)):
+                raise ControlError(f"baud: expected an integer or null, got {baud!r}")
+            settings["baud"] = baud
+        if "seed" in m:
+            seed = m["seed"]
+            if isinstance(seed, bool) or not isinstance(seed, int):
+                raise ControlError(f"seed: expected an integer, got {seed!r}")
+            settings["seed"] = seed
+        if "cable" in m:
+            cable = m["cable"]
+            if not isinstance(cable, bool):
+                raise ControlError(f"cable: expected true or false, got {cable!r}")
+            settings["cable"] = cable
         try:
             faults = Faults(**settings)
         except (TypeError, ValueError) as exc:
@@ -338,6 +363,8 @@ class ControlServer:
         self, service: BoardService, m: dict[str, Any], until: object
     ) -> Callable[[], bool]:
         board = service.board
+        if until not in ("done", "idle", "position"):
+            raise ControlError(f"until: expected done, idle or position, got {until!r}")
         if until == "idle":
             # every axis at rest with nothing queued
             return lambda: all(not a.moving and a.queue.empty for a in board.axes)
@@ -346,8 +373,14 @@ class ControlServer:
         if until == "done":
             return lambda: axis.done
         if until == "position":
+            # "reaches (or passes)": from where the axis is, the target is ahead on one side and
+            # the wait ends once the counter is there or beyond. A moving axis that has already
+            # passed it on this motion (it lies between where the motion began and here) has
+            # reached it: a client that asks a moment late must not wait for a return trip.
             target = _number(m, "position")
             start = axis.counter(service.clock())
+            if axis.moving and min(axis.traj.x0, start) <= target <= max(axis.traj.x0, start):
+                return lambda: True
             side = math.copysign(1.0, target - start) if target != start else 0.0
 
             def reached() -> bool:
@@ -355,7 +388,7 @@ class ControlServer:
                 return here == target or (side != 0.0 and (here - target) * side >= 0)
 
             return reached
-        raise ControlError(f"until: expected done, idle or position, got {until!r}")
+        raise AssertionError(until)  # pragma: no cover - checked above
 
 
 class _Watcher:
