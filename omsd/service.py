@@ -31,6 +31,8 @@ from omsd.link import Link, make_link
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
 from omsd.timebase import Timebase
 
+#: Host bytes offered to a board in one go; the rest waits for the next turn of the event loop.
+FEED_BITE = 4096
 #: Host bytes a faulty cable holds in flight (paced or damaged) before it drops more.
 MAX_IN_FLIGHT = 64 * 1024
 
@@ -114,6 +116,7 @@ class BoardService:
         still passed on, in order, as the board can take it."""
         self._orphan += data
         self._feed_orphan()
+        self.service()  # what the board answers goes to "(no client)", not to the next one
 
     def _feed_orphan(self) -> None:
         if self._orphan:
@@ -142,7 +145,9 @@ class BoardService:
         self._feed_orphan()
         taken = 0
         if not self._orphan:  # a vanished client's bytes go first
-            taken = self.link.from_host(data, self.clock())
+            # a bite at a time: a client that wrote megabytes gets the rest taken on later
+            # turns of the loop, so the other boards are served in between
+            taken = self.link.from_host(data[:FEED_BITE], self.clock())
         if taken:
             self.active = client
             chunk = data[:taken]

@@ -5,6 +5,17 @@ import pytest
 from omsd.board.harness import Harness
 
 
+def pytest_addoption(parser: pytest.Parser) -> None:
+    """``pytest --long``: the long robustness variants (tests/robustness; issue 7's "long
+    variants runnable by a flag"), from any directory."""
+    parser.addoption(
+        "--long",
+        action="store_true",
+        default=False,
+        help="run the long robustness variants (10^6 fuzz inputs, 1,000 churn cycles, ...)",
+    )
+
+
 @pytest.fixture
 def pc48() -> Harness:
     """A PC48-4 (four open-loop axes) at power-up, on a manual clock at t = 0."""

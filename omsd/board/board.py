@@ -343,7 +343,7 @@ class Board:
         self._framed(text, b"\n\r\r", t)
 
     def _framed(self, text: str, frame: bytes, t: float) -> None:
-        payload = text.encode("ascii")
+        payload = text.encode("latin-1")  # a PCIx macro (PM) may hold any byte
         # PCIx / MAX family: text<LF><CR>, nothing before it
         trailing = self.model.framing == "trailing"
         data = payload + b"\n\r" if trailing else frame + payload + frame

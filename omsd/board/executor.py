@@ -787,12 +787,14 @@ class Executor:
     def check_hold(self, axis: Axis, t: float) -> None:
         """Position maintenance (PC48 §6.15 HN): correct toward the held position with velocity
         HG × error, at most HV, until within the HD deadband."""
-        if not axis.hold or axis.motion is not Motion.IDLE or axis.hv <= 0.0:
+        if not axis.hold or axis.motion is not Motion.IDLE:
             return
         error = axis.hold_goal - axis.encoder(t)
         if abs(error) <= axis.hd:
             axis.in_position = True
             return
+        if axis.hv <= 0.0:
+            return  # "some value must be set for position correction to occur at all"
         tick = self.board.clock.at_or_after(t)
         motor_error = error / axis.ratio
         pieces = pf.hold_correction(motor_error, axis.hg, axis.hv, axis.hd / axis.ratio)
