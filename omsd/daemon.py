@@ -15,15 +15,15 @@ import signal
 import ssl
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TextIO
 
 from omsd import sdnotify
 from omsd.config import DaemonConfig
-from omsd.control.server import ControlServer, EndpointInfo, SocketInUse
+from omsd.control.server import ControlServer, SocketInUse
 from omsd.service import BoardService
 from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
+from omsd.transport import Endpoint
 from omsd.transport.pty import PtyEndpoint
 from omsd.transport.tcp import serve_tcp
 
@@ -74,18 +74,6 @@ class FlashSaver:
         """Wait for every save asked for so far."""
         while self._tasks:
             await asyncio.gather(*list(self._tasks), return_exceptions=True)
-
-
-@dataclass(frozen=True)
-class Endpoint:
-    board: str
-    model: str
-    link: str
-    kind: str  # "tcp" or "pty"
-    address: str  # "127.0.0.1:7048" or "/run/omsd/board1 -> /dev/pts/3"
-
-    def line(self) -> str:
-        return f"{self.board} {self.model} {self.link} {self.kind} {self.address}"
 
 
 class Daemon:
@@ -165,7 +153,7 @@ class Daemon:
         if config.socket is None and config.tcp is None:
             return
         services = {s.name: s for s in self.services}
-        control = ControlServer(services, self._endpoint_infos, self.log)
+        control = ControlServer(services, lambda: self.endpoints, self.log)
         self.control = control
         if config.socket is not None:
             try:
@@ -207,16 +195,13 @@ class Daemon:
         from omsd.mqtt import MqttBridge  # a daemon without [mqtt] never loads the client
 
         services = {s.name: s for s in self.services}
-        control = ControlServer(services, self._endpoint_infos, self.log)
+        control = ControlServer(services, lambda: self.endpoints, self.log)
         try:
             bridge = MqttBridge(config, list(self.services), control, self.log)
         except (ssl.SSLError, OSError) as exc:
             raise StartupError(f"mqtt: cannot set up TLS with {config.tls}: {exc}") from None
         bridge.start()
         self.mqtt = bridge
-
-    def _endpoint_infos(self) -> list[EndpointInfo]:
-        return [EndpointInfo(e.board, e.model, e.link, e.kind, e.address) for e in self.endpoints]
 
     def _load_state(self) -> StateFile | None:
         """The boards' flash: "a corrupt or missing state file gives the factory defaults and

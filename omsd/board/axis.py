@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 from omsd.board import profiles as pf
 from omsd.board.profiles import Trajectory
 from omsd.board.queue import CommandQueue, SyncGroup
-from omsd.board.servo import ServoLoop
+from omsd.board.servo import ServoGains, ServoLoop
 from omsd.board.world import AxisWorld, LimitWiring, SwitchType
 
 if TYPE_CHECKING:
@@ -109,37 +109,19 @@ class Axis:
 
     def reset(self, t: float, keep_position: bool = True) -> None:
         """Power-up defaults (PC48 §8.1 of the digest; each value from its command's text)."""
-        model = self.board.model
+        self.servo_sync(t)  # the loop runs to the reset on the old trajectory and gains
         phys = self.phys(t) if keep_position else self.world.start_position
         self.traj = Trajectory.at_rest(t, 0.0)
         self.motion = Motion.IDLE
         self.phys_offset = phys if self.stall_phys is None else self.stall_phys
-        self.vl: float = float(model.default_velocity)
-        self.ac: float = float(model.default_acceleration)
-        self.vb: float = 0.0
-        self.ramp = pf.LINEAR
-        # PCIx parameters (the older boards never change them)
-        self.dc: float = 200_000.0  # DC: "defaults to 200,000"
-        self.backlash: int = 0  # BC
-        self.aux_default_high: bool = True  # ADH / ADL
-        self.direction_inverted: bool = False  # DBI / DBN
-        self.limit_high: bool = False  # LH / LL
-        self.slip_kill: bool = False  # TN / TF
-        self.soft_limit = False  # PCIx SL / SF (the older boards: Board.soft_limits)
+        self.factory_parameters()
+        self.slip_kill: bool = False  # PCIx TN / TF
         # PCIx motion state (omsd.board.pcix_motion); inert on the older boards
         self.gear: Gear | None = None  # EG / TX: the axis this one follows
         self.travel_limits: tuple[float, float] | None = None  # TL (lower, upper); TL0,0: None
         self.backlash_dir: int | None = None  # direction BC last took the backlash up in
         self.setpoint_offset = 0.0  # BC on a servo: set point beyond the commanded position
         self.contour_origin: float | None = None  # where a running contour's own pieces begin
-        self.uu: Decimal | None = None
-        self.ratio = 1.0  # encoder counts per motor count (ER)
-        self.hv: float = 0.0
-        self.hg: float = 1.0
-        self.hd: float = 0.0
-        self.es: float = 0.0
-        self.limits_on: bool = True
-        self.home_high: bool = False
         self.home_encoder: bool = False
         self.hold = False
         self.slip_detect = False
@@ -148,8 +130,6 @@ class Axis:
         self.slipped = False
         self.direction = 1
         self.aux: bool = True
-        self.pa: bool | None = None  # aux state during a move in PA mode
-        self.se_ms: int = 0
         self.aux_timer: float | None = None
         self.in_arm: tuple[float, SyncGroup] | None = None
         self.in_fire: float | None = None
@@ -173,6 +153,35 @@ class Axis:
         self._cache: tuple[float, str] | None = None
 
     # -- frames -------------------------------------------------------------------------------
+
+    def factory_parameters(self) -> None:
+        """The parameters as they leave the factory: power-up on the older boards; the PCIx's
+        RF, and its power-up before the saved defaults (AP) are loaded over them."""
+        model = self.board.model
+        self.vl: float = float(model.default_velocity)
+        self.ac: float = float(model.default_acceleration)
+        self.vb: float = 0.0
+        self.ramp = pf.LINEAR
+        self.uu: Decimal | None = None
+        self.ratio = 1.0  # encoder counts per motor count (ER)
+        self.hv: float = 0.0
+        self.hg: float = 1.0
+        self.hd: float = 0.0
+        # ES: the PCIx's "factory default value is 1"; the PC48's slip tolerance starts at 0
+        self.es: float = 1.0 if model.dialect == "pcix" else 0.0
+        self.limits_on: bool = True
+        self.home_high: bool = False
+        self.pa: bool | None = None  # aux state during a move in PA mode
+        self.se_ms: int = 0
+        self.soft_limit = False  # SL / SF (per axis on the PCIx; Board.soft_limits sets all)
+        # PCIx parameters (the older boards never change them)
+        self.dc: float = 200_000.0  # DC: "defaults to 200,000"
+        self.backlash: int = 0  # BC
+        self.aux_default_high: bool = True  # ADH / ADL
+        self.direction_inverted: bool = False  # DBI / DBN
+        self.limit_high: bool = False  # LH / LL
+        if self.servo is not None:
+            self.servo.set_gains(ServoGains())
 
     def position(self, t: float) -> float:
         return self.traj.position(t)

@@ -94,6 +94,17 @@ class Board:
         for axis in self.axes:
             axis.ramp = shape
 
+    @property
+    def soft_limits(self) -> bool:
+        """SL/SF: one mode for the whole PC48 (setting it sets every axis's); per axis on the
+        PCIx (``SLb,b,b,b``)."""
+        return self.axes[0].soft_limit
+
+    @soft_limits.setter
+    def soft_limits(self, on: bool) -> None:
+        for axis in self.axes:
+            axis.soft_limit = on
+
     def _power_up(self, t: float) -> None:
         self.ramp = pf.LINEAR
         self.soft_limits = False

@@ -989,15 +989,21 @@ def _ce(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.mode = "AA"
 
 
+def runnable_contour(ix: Interpreter) -> ContourDefinition:
+    """The defined contour CX (and the PCIx's CG) may run: "The CX command cannot be placed
+    within a loop or while construct."."""
+    defn = ix.board.contour
+    if defn is None or not defn.valid:
+        raise CommandFailed(ErrorKind.NO_CONTOUR)
+    if ix.in_loop(list(ix.board.axes)):
+        raise CommandFailed(ErrorKind.NOT_IN_LOOP)
+    return defn
+
+
 @handles("CX")
 def _cx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     board = ix.board
-    defn = board.contour
-    if defn is None or not defn.valid:
-        raise CommandFailed(ErrorKind.NO_CONTOUR)
-    if ix.in_loop(list(board.axes)):
-        # "The CX command cannot be placed within a loop or while construct."
-        raise CommandFailed(ErrorKind.NOT_IN_LOOP)
+    defn = runnable_contour(ix)
     group = SyncGroup(set(range(len(board.axes))))
     group.action = lambda g, when: run_contour(ix, defn, when)
     ix.enqueue([(a, Op("CX", (), ix.cost(cell, a), group)) for a in board.axes])

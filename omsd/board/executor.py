@@ -877,7 +877,7 @@ class Executor:
             # SL: "ramp down instead of terminating immediately. The output queue is not
             # flushed except for the current move. This mode is effective for point to point
             # moves only."
-            ramp = board.soft_limits and axis.motion is Motion.MOVE
+            ramp = axis.soft_limit and axis.motion is Motion.MOVE
         if ramp:
             axis.decelerate(t)
         else:

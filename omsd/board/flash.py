@@ -12,7 +12,7 @@ list and is not saved ("defaults to 200,000").
 The saved set is a JSON object (``omsd.statefile.BoardFlash.defaults``)::
 
     {"axes": {"X": {"VL": 200000.0, "AC": ..., "servo": {"kp": 10.0, ...}, ...}, ...},
-     "soft_limits": false, "tables": {"2": [[0.1, 0.2], ...]}, "scurves": {"1": [...]}}
+     "tables": {"2": [[0.1, 0.2], ...]}, "scurves": {"1": [...]}}
 
 Values that do not fit (a hand-edited file) are skipped one by one: the factory value stays.
 """
@@ -70,7 +70,6 @@ def board_parameters(board: Board) -> dict[str, Any]:
     return {
         "model": board.model.name,
         "axes": {a.letter: axis_parameters(a) for a in board.axes},
-        "soft_limits": board.soft_limits,
         "tables": {str(n): [list(p) for p in table] for n, table in board.ramp_tables.items()},
         "scurves": {str(n): list(asdict(s).values()) for n, s in board.scurves.items()},
     }
@@ -176,8 +175,6 @@ def apply(board: Board, saved: dict[str, Any]) -> None:
                 board.scurves[int(key)] = pf.SCurve(*(float(v) for v in values))
             except (TypeError, ValueError):
                 continue
-    if isinstance(saved.get("soft_limits"), bool):
-        board.soft_limits = saved["soft_limits"]
     axes = saved.get("axes")
     if isinstance(axes, dict):
         for axis in board.axes:
@@ -190,30 +187,7 @@ def apply(board: Board, saved: dict[str, Any]) -> None:
 
 def factory(board: Board) -> None:
     """RF: "Current parameters := factory defaults"; the flash is left as it is."""
-    model = board.model
     board.ramp_tables.clear()
     board.scurves.clear()
-    board.soft_limits = False
     for axis in board.axes:
-        axis.ac = float(model.default_acceleration)
-        axis.vl = float(model.default_velocity)
-        axis.vb = 0.0
-        axis.dc = 200_000.0
-        axis.es = 1.0  # ES: "The factory default value is 1"
-        axis.hd = 0.0
-        axis.hg = 1.0
-        axis.hv = 0.0
-        axis.ratio = 1.0
-        axis.backlash = 0
-        axis.home_high = False
-        axis.limit_high = False
-        axis.limits_on = True
-        axis.pa = None
-        axis.se_ms = 0
-        axis.soft_limit = False
-        axis.uu = None
-        axis.aux_default_high = True
-        axis.direction_inverted = False
-        axis.ramp = pf.LINEAR
-        if axis.servo is not None:
-            axis.servo.set_gains(ServoGains())
+        axis.factory_parameters()

@@ -36,12 +36,12 @@ MAX_LOOP_DEPTH = 4
 
 # Commands that only report or select an axis: they queue nothing, so the axes need not be run
 # after them (the interpreter's hot path: a client polling QA/RP).
+# (and every PCIx query ``?XX``, recognised by its first character).
 _REPORTS = frozenset(
     {
         *("RP", "RE", "RA", "QA", "QI", "RI", "RV", "RC", "RU", "RQ", "WY", "BX", "EA", "RL"),
-        *("PP", "PE", "QL", "#WS", "PM", "EG?", "PS?", "LT?", "CL?", "?PS"),
+        *("PP", "PE", "QL", "#WS", "PM", "EG?", "PS?", "LT?", "CL?"),
         *("AX", "AY", "AZ", "AT", "AU", "AV", "AR", "AS", "AM"),
-        *(f"?{a}{b}" for a in "ABCDEFGHIJKLMNOPQRSTUVWXYZ" for b in "ABCDEFGHIJKLMNOPQRSTUVWXYZ"),
     }
 )
 MAX_MACRO_DEPTH = 8
@@ -207,7 +207,9 @@ class Interpreter:
                     return progressed
                 # let the axes run what was queued before the next command is read; a report or
                 # an axis selection queues nothing and leaves them as they were
-                if not isinstance(token, Command) or token.mnemonic not in _REPORTS:
+                if isinstance(token, Command) and not (
+                    token.mnemonic in _REPORTS or token.mnemonic[0] == "?"
+                ):
                     for axis in board.axes:
                         board.executor.step(axis, t)
                 progressed = True

@@ -31,7 +31,7 @@ from decimal import Decimal
 from omsd.board import flash
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis
-from omsd.board.commands import Handler, _reset_flags, _status, registrar
+from omsd.board.commands import Handler, registrar
 from omsd.board.events import ErrorKind
 from omsd.board.interpreter import CommandFailed, Interpreter
 from omsd.board.macros import PERMANENT, TEMPORARY, MacroCapture
@@ -741,14 +741,6 @@ def _ea(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         )
         axis.slipped = False
     ix.board.reply_status(",".join(texts), t)
-
-
-@handles("RA", "QA")
-def _ra(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    axis = ix.axis
-    ix.board.reply_status(_status(axis, t), t)
-    if cmd.mnemonic == "RA":
-        _reset_flags(ix, [axis], t)
 
 
 @handles("CA")

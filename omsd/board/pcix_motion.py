@@ -143,7 +143,7 @@ from typing import TYPE_CHECKING
 
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis, HomeSearch, Motion, Wait
-from omsd.board.commands import HANDLERS, Handler, registrar, run_contour
+from omsd.board.commands import HANDLERS, Handler, registrar, run_contour, runnable_contour
 from omsd.board.events import SlipEvent
 from omsd.board.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.board.queue import Op, SyncGroup
@@ -887,11 +887,7 @@ def _fl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _cg(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """CG (§5.9.8): "a form of the CX command"; a marker after it in every queue holds MT."""
     board = ix.board
-    defn = board.contour
-    if defn is None or not defn.valid:
-        raise CommandFailed(ErrorKind.NO_CONTOUR)
-    if ix.in_loop(list(board.axes)):
-        raise CommandFailed(ErrorKind.NOT_IN_LOOP)
+    defn = runnable_contour(ix)
     group = SyncGroup(set(range(len(board.axes))))
 
     def run(g: SyncGroup, when: float) -> None:

@@ -15,7 +15,7 @@ import math
 import os
 import socket
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -24,19 +24,11 @@ from omsd.control.protocol import MAX_LINE, OPS, ControlError, decode, encode
 from omsd.faults import Faults
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Traffic, TrafficLog
+from omsd.transport import Endpoint
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
 MAX_WAIT = 3600.0
 POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
-
-
-@dataclass(frozen=True)
-class EndpointInfo:
-    board: str
-    model: str
-    link: str
-    kind: str
-    address: str
 
 
 class SocketInUse(Exception):
@@ -47,7 +39,7 @@ class ControlServer:
     def __init__(
         self,
         services: dict[str, BoardService],
-        endpoints: Callable[[], list[EndpointInfo]],
+        endpoints: Callable[[], list[Endpoint]],
         log: TrafficLog,
     ) -> None:
         self.services = services
@@ -427,4 +419,4 @@ def _alive(path: Path) -> bool:
     return True
 
 
-__all__ = ["ControlServer", "EndpointInfo", "SocketInUse"]
+__all__ = ["ControlServer", "SocketInUse"]
