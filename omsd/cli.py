@@ -7,8 +7,10 @@ macros) across restarts, with either form. ``omsd models`` lists the personaliti
 console`` talks to one board on this terminal without serving it; ``omsd ctl`` reaches behind
 the boards of a running daemon (:mod:`omsd.ctl`, which has its own options and exit statuses).
 
-Exit status: 0 after a clean stop, 2 for a configuration error, 1 when the daemon cannot start
-(a port in use, a pty link that cannot be made). Errors are one line on standard error.
+Exit status: 0 after a clean stop, 2 for a configuration error or a place the daemon refuses to
+use (a runtime directory another user could change, a file at a pty link's path that is not
+omsd's: :mod:`omsd.files`), 1 when the daemon cannot start (a port in use, a pty link that
+cannot be made). Errors are one line on standard error.
 """
 
 from __future__ import annotations
@@ -130,7 +132,7 @@ def _serve(args: argparse.Namespace) -> int:
     log_file = args.log if args.log else config.log.file
     view = args.view or config.log.view
     try:
-        log = TrafficLog(view=view, file=log_file)
+        log = TrafficLog(view=view, file=log_file, group=config.log.group)
     except OSError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 1
@@ -138,7 +140,7 @@ def _serve(args: argparse.Namespace) -> int:
         asyncio.run(Daemon(config, log).run())
     except StartupError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
-        return 1
+        return exc.status
     except KeyboardInterrupt:
         return 130
     finally:

@@ -7,9 +7,11 @@ world (``config/omsd.toml`` shows and explains every key)::
     [log]
     file = "/var/log/omsd/traffic.jsonl"   # JSON-lines traffic log (relative: to this file)
     view = "auto"                          # auto | rich | plain | off
+    group = "adm"                          # a new log file: 0640 in this group (default 0600)
 
     [state]
     file = "/var/lib/omsd/omsd.state"      # the boards' flash memory (relative: to this file)
+    group = "adm"                          # the state file: 0640 in this group (default 0600)
 
     [mqtt]                                 # the MQTT bridge (omsd.mqtt): off without this table
     host = "broker.lab"                    # required; port 1883 (8883 with tls) unless given
@@ -24,6 +26,8 @@ world (``config/omsd.toml`` shows and explains every key)::
     tcp = ["127.0.0.1:7001"]   # "[HOST:]PORT" or PORT, or a list of them
     pty = "/run/omsd/xy"       # path, true (the default link), {link, group, mode}, or a list
     second_client = "takeover" # takeover | refuse
+    linger = 60                # seconds a TCP client that shut down its sending side is kept
+                               # for the answers to what it sent (0: closed at once)
     inputs = { 0 = false }     # general-purpose input bit -> level driven onto it (true = high)
 
     [board.axes.X]             # any field of omsd.board.world.AxisWorld
@@ -70,6 +74,7 @@ Choices where the issue is silent:
 from __future__ import annotations
 
 import difflib
+import grp
 import ipaddress
 import json
 import math
@@ -93,6 +98,10 @@ DEFAULT_MODEL = "PC48-4E"
 DEFAULT_BOARD_NAME = "board1"
 DEFAULT_EOS = 0x0A  # §7.3.2: "The default value is an LF."
 DEFAULT_BUFFER_SIZE = 0x0100  # §7.3.2: "The default value is 0100 hex (256 decimal)."
+#: How long a TCP client that has shut down its sending side (``nc -N``, ``shutdown(SHUT_WR)``)
+#: is kept open for the answers, done markers and limits its commands are yet to produce.
+DEFAULT_LINGER = 60.0
+MAX_LINGER = 3600.0
 BUFFER_SIZE_MIN = 0x0010  # §7.3.2: "from 0010 to 7fff (16 to 32767 decimal)"
 BUFFER_SIZE_MAX = 0x7FFF
 DEFAULT_PTY_MODE = 0o660
@@ -151,6 +160,7 @@ class BoardConfig:
     tcp: tuple[TcpEndpoint, ...] = ()
     pty: tuple[PtyEndpoint, ...] = ()
     second_client: str = "takeover"  # a new TCP client replaces the connected one, or "refuse"
+    linger: float = DEFAULT_LINGER  # s a half-closed TCP client waits for its answers
     world: Mapping[str, AxisWorld] = field(default_factory=_no_world)  # axis letter -> world
     inputs: Mapping[int, bool] = field(default_factory=_no_inputs)  # input bit -> high?
     encoders: str | None = None  # axes fitted with encoders, if not the model's (VS4 option)
@@ -176,6 +186,7 @@ class BoardConfig:
 class LogConfig:
     file: Path | None = None  # JSON-lines traffic log
     view: str = "auto"  # "auto", "rich", "plain" or "off"
+    group: str | None = None  # a new log file is 0640 in this group; None: 0600
 
 
 @dataclass(frozen=True)
@@ -186,6 +197,7 @@ class DaemonConfig:
     state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
     control: ControlConfig = field(default_factory=lambda: ControlConfig())
     mqtt: MqttConfig | None = None  # the MQTT bridge (omsd.mqtt); None: off
+    state_group: str | None = None  # the state file is 0640 in this group; None: 0600
 
 
 @dataclass(frozen=True)
@@ -241,17 +253,24 @@ class ConfigError(Exception):
 # -- defaults -----------------------------------------------------------------------------------
 
 
-def default_pty_link(name: str) -> Path:
-    """Where a board's pty link goes when none is configured: ``$RUNTIME_DIRECTORY/<name>``
-    under a systemd unit with ``RuntimeDirectory=``, else ``$XDG_RUNTIME_DIR/omsd/<name>``,
-    else ``/tmp/omsd-<uid>/<name>``. The caller creates the directory."""
+def runtime_directory() -> Path:
+    """The daemon's runtime directory, where the default pty links and the control socket go:
+    ``$RUNTIME_DIRECTORY`` under a systemd unit with ``RuntimeDirectory=``, else
+    ``$XDG_RUNTIME_DIR/omsd``, else ``/tmp/omsd-<uid>``. The daemon creates it (mode 0700) and
+    refuses one that another user could change (:func:`omsd.files.check_runtime_directory`)."""
     runtime = os.environ.get("RUNTIME_DIRECTORY", "").split(":")[0]
     if os.path.isabs(runtime):
-        return Path(runtime) / name
+        return Path(runtime)
     xdg = os.environ.get("XDG_RUNTIME_DIR", "")
     if os.path.isabs(xdg):
-        return Path(xdg) / "omsd" / name
-    return Path(f"/tmp/omsd-{os.getuid()}") / name
+        return Path(xdg) / "omsd"
+    return Path(f"/tmp/omsd-{os.getuid()}")
+
+
+def default_pty_link(name: str) -> Path:
+    """Where a board's pty link goes when none is configured: ``<name>`` in the
+    :func:`runtime_directory`. The daemon creates the directory."""
+    return runtime_directory() / name
 
 
 def _default_board(model: str = DEFAULT_MODEL) -> BoardConfig:
@@ -479,6 +498,7 @@ _BOARD_KEYS = (
     "tcp",
     "pty",
     "second_client",
+    "linger",
     "inputs",
     "axes",
     "encoders",
@@ -487,8 +507,8 @@ _BOARD_KEYS = (
     "max_queries",
 )
 _PTY_KEYS = ("link", "group", "mode")
-_LOG_KEYS = ("file", "view")
-_STATE_KEYS = ("file",)
+_LOG_KEYS = ("file", "view", "group")
+_STATE_KEYS = ("file", "group")
 _CONTROL_KEYS = ("socket", "tcp")
 _MQTT_KEYS = (
     "host",
@@ -645,6 +665,7 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
     second = _choice(
         table.get("second_client", "takeover"), SECOND_CLIENT_POLICIES, at.key("second_client")
     )
+    linger = _linger(table.get("linger", DEFAULT_LINGER), at.key("linger"))
     encoders = _encoders(table.get("encoders"), at.key("encoders"), model)
     serial = _label(table.get("serial"), at.key("serial"), r"[A-Za-z0-9-]{1,16}", "a serial number")
     firmware = _label(table.get("firmware"), at.key("firmware"), r"\d{1,2}\.\d{2}", "a version")
@@ -667,6 +688,7 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
         tcp=tuple(t for t, _ in tcp),
         pty=tuple(p for p, _ in pty),
         second_client=second,
+        linger=linger,
         world=world,
         inputs=inputs,
         encoders=encoders,
@@ -675,6 +697,15 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
         max_queries=max_queries,
     )
     return _Parsed(board, at, tcp, pty)
+
+
+def _linger(value: object, at: _At) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise at.expected(f"a number of seconds 0..{MAX_LINGER:g}", value)
+    seconds = float(value)
+    if not 0 <= seconds <= MAX_LINGER:
+        raise at.expected(f"a number of seconds 0..{MAX_LINGER:g}", value)
+    return seconds
 
 
 def _encoders(value: object, at: _At, model: Model) -> str | None:
@@ -761,7 +792,7 @@ def load_config(path: str | os.PathLike[str]) -> DaemonConfig:
 def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
     _table(document, at, _TOP_KEYS)
     log = _log(document.get("log", {}), at.key("log"), base)
-    state = _state(document.get("state", {}), at.key("state"), base)
+    state, state_group = _state(document.get("state", {}), at.key("state"), base)
     if state is not None and state == log.file:
         raise _not_the_log(at.key("state").key("file"), state)
     boards = document.get("board")
@@ -773,7 +804,15 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
     _check_unique(parsed)
     control = _control(document.get("control", {}), at.key("control"), base)
     mqtt = _mqtt(document["mqtt"], at.key("mqtt"), base) if "mqtt" in document else None
-    return DaemonConfig(tuple(p.board for p in parsed), log, at.source, state, control, mqtt)
+    return DaemonConfig(
+        tuple(p.board for p in parsed),
+        log,
+        at.source,
+        state,
+        control,
+        mqtt,
+        state_group=state_group,
+    )
 
 
 def _control(value: object, at: _At, base: Path) -> ControlConfig:
@@ -883,12 +922,30 @@ def _log(value: object, at: _At, base: Path) -> LogConfig:
     table = _table(value, at, _LOG_KEYS)
     file = _path(table["file"], at.key("file"), base) if "file" in table else None
     view = _choice(table.get("view", "auto"), VIEWS, at.key("view"))
-    return LogConfig(file, view)
+    group = _file_group(table["group"], at.key("group")) if "group" in table else None
+    return LogConfig(file, view, group)
 
 
-def _state(value: object, at: _At, base: Path) -> Path | None:
+def _state(value: object, at: _At, base: Path) -> tuple[Path | None, str | None]:
     table = _table(value, at, _STATE_KEYS)
-    return _path(table["file"], at.key("file"), base) if "file" in table else None
+    file = _path(table["file"], at.key("file"), base) if "file" in table else None
+    group = _file_group(table["group"], at.key("group")) if "group" in table else None
+    return file, group
+
+
+def _file_group(value: object, at: _At) -> str:
+    """The group a file the daemon creates is given (``[log] group``, ``[state] group``): an
+    existing group that the daemon's user is in (a process can only give a file to a group it
+    belongs to; root can give it to any), so that the mistake shows now and not at the first
+    write."""
+    name = _string(value, at)
+    try:
+        gid = grp.getgrnam(name).gr_gid
+    except KeyError:
+        raise at.expected("the name of an existing group", value) from None
+    if os.geteuid() != 0 and gid != os.getegid() and gid not in os.getgroups():
+        raise at.expected(f"a group that omsd's user (uid {os.geteuid()}) belongs to", value)
+    return name
 
 
 def _not_the_log(at: _At, state: Path) -> ConfigError:
@@ -975,5 +1032,6 @@ __all__ = [
     "default_pty_link",
     "from_options",
     "load_config",
+    "runtime_directory",
     "with_state_option",
 ]

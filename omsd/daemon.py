@@ -2,7 +2,13 @@
 
 ``Daemon.run`` brings every board up with its endpoints, prints one line per endpoint saying
 where the board can be reached, tells systemd it is ready, and serves until SIGTERM or SIGINT;
-then it stops accepting, closes its clients, removes its pty links and flushes the logs.
+then it stops accepting, closes its clients, removes its pty links and flushes the logs. SIGHUP
+reopens the log file (logrotate) and the daemon goes on.
+
+Before it creates anything it checks the places it is to create things in
+(:func:`omsd.files.preflight`): a runtime directory another user could change, or a file at a
+pty link's or the control socket's path that is not omsd's, is refused (:class:`StartupRefused`,
+exit status 2) and nothing is served.
 """
 
 from __future__ import annotations
@@ -18,8 +24,9 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TextIO
 
 from omsd import sdnotify
-from omsd.config import DaemonConfig
+from omsd.config import DaemonConfig, runtime_directory
 from omsd.control.server import ControlServer, SocketInUse
+from omsd.files import Refused, preflight
 from omsd.service import BoardService
 from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
@@ -32,7 +39,17 @@ if TYPE_CHECKING:
 
 
 class StartupError(Exception):
-    """A board could not be brought up (a port in use, a pty link that cannot be made)."""
+    """A board could not be brought up (a port in use, a pty link that cannot be made).
+    ``status`` is the exit status the command line gives it."""
+
+    status = 1
+
+
+class StartupRefused(StartupError):
+    """A place the daemon will not use: a runtime directory another user could change, a file
+    at a pty link's or the control socket's path that is not omsd's (:mod:`omsd.files`)."""
+
+    status = 2
 
 
 class FlashSaver:
@@ -93,6 +110,7 @@ class Daemon:
     async def start(self) -> list[Endpoint]:
         loop = asyncio.get_running_loop()
         loop.set_exception_handler(self._loop_error)
+        self._preflight()
         state = self._load_state()
         try:
             for board in self.config.boards:
@@ -144,6 +162,18 @@ class Daemon:
             await self.stop(quiet=True)
             raise
         return self.endpoints
+
+    def _preflight(self) -> None:
+        """Refuse, before anything is created, the places that are not omsd's to use."""
+        ptys = [(b.name, p.link) for b in self.config.boards for p in b.pty]
+        try:
+            preflight(runtime_directory(), ptys, self.config.control.socket)
+        except Refused as exc:
+            raise StartupRefused(str(exc)) from None
+        except OSError as exc:  # the runtime directory cannot be made, a path cannot be read
+            reason = exc.strerror or str(exc)
+            where = exc.filename or runtime_directory()
+            raise StartupError(f"cannot use {where}: {reason}") from None
 
     async def _start_control(self) -> None:
         """The control endpoint: the Unix socket (owner-only), and TCP if configured. The
@@ -208,7 +238,7 @@ class Daemon:
         one clear log line"."""
         if self.config.state is None:
             return None
-        state = StateFile(self.config.state)
+        state = StateFile(self.config.state, self.config.state_group)
         result = state.load()
         if result.message is not None:
             (self.log.info if result.ok else self.log.warning)(result.message)
@@ -217,6 +247,8 @@ class Daemon:
 
     @staticmethod
     def _attach_flash(service: BoardService, state: StateFile, saver: FlashSaver) -> None:
+        """The board's flash from the state file; saved values that do not fit (a hand-edited
+        file) are skipped, and said in one warning line."""
         board = service.board
         if service.model.dialect != "pcix":
             return  # the older boards keep nothing in flash
@@ -229,7 +261,14 @@ class Daemon:
                 f"state file: board {service.name!r} was saved as a {flash.defaults.get('model')}"
                 f", not a {service.model.name}; using factory defaults (AP replaces them)"
             )
-        board.load_flash()
+        problems = board.load_flash()
+        if problems:
+            n = len(problems)
+            service.log.warning(
+                f"state file {state.path}: board {service.name!r}: ignored {n} saved"
+                f" value{'s' * (n > 1)} that {'do' if n > 1 else 'does'} not fit, using the"
+                f" factory value{'s' * (n > 1)}: {'; '.join(problems)}"
+            )
         board.flash_writer = saver.writer(service.name)
 
     def _announce(self, endpoint: Endpoint) -> None:
@@ -242,6 +281,7 @@ class Daemon:
         # stop the daemon cleanly
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, self.request_stop)
+        loop.add_signal_handler(signal.SIGHUP, self.reopen_logs)
         try:
             await self.start()  # on failure it has already cleaned up, quietly
             sdnotify.ready(f"serving {len(self.endpoints)} endpoint(s)")
@@ -251,8 +291,18 @@ class Daemon:
                 sdnotify.stopping()
                 await self.stop()
         finally:
-            for sig in (signal.SIGTERM, signal.SIGINT):
+            for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
                 loop.remove_signal_handler(sig)
+
+    def reopen_logs(self) -> None:
+        """SIGHUP: open the log file again (after logrotate renamed it, a new one), and say so.
+        The daemon goes on serving. Standard error is not reopened: it is whatever the daemon
+        was started with (the journal under systemd)."""
+        path = self.log.path
+        if path is None:
+            self.log.info("SIGHUP: no log file to reopen")
+        elif self.log.reopen():
+            self.log.info(f"reopened log files on SIGHUP: {path}")
 
     def request_stop(self) -> None:
         self._stop.set()

@@ -16,6 +16,7 @@ topic level)::
     omsd/<board>/traffic     one chunk of traffic (JSON)       QoS 0
     omsd/<board>/cmd/<op>    a control operation (JSON args)   subscribed, QoS 1
     omsd/<board>/reply/<op>  its outcome (JSON)                QoS 1
+    omsd/status/reply        the outcome of a command for a board that does not exist
 
 ``state`` is the board's snapshot, the board part of the control API's ``state`` (``axes``
 with, per axis, ``position``, ``encoder``, ``velocity``, ``moving``, ``done``,
@@ -49,7 +50,10 @@ arguments from the JSON object in the payload (an empty payload is ``{}``), run 
 false, "error": "one line"}``, ``id`` echoed from the payload (``null`` without one) so a caller
 can match replies. Choices: the topic's board and op win over any in the payload; a *retained*
 message on a command topic is ignored (logged once per topic), since it would otherwise be run
-again at every reconnection and every daemon start.
+again at every reconnection and every daemon start. A command for a board the daemon does not
+serve is not run and is answered on ``<prefix>/status/reply`` (issue 13: never on a topic
+made of a name from outside), ``{"id": 3, "ok": false, "error": "no board 'zz'; boards: xy",
+"board": "zz", "op": "state"}``, QoS 1, not retained.
 
 Never blocking the boards: the bridge observes each board through
 :attr:`BoardService.observers`, and an observer only appends to a bounded queue (or notes that the
@@ -388,6 +392,7 @@ class MqttBridge:
         host = f"[{config.host}]" if ":" in config.host else config.host
         self.where = f"{host}:{config.port}"
         self.status_topic = f"{config.prefix}/status"
+        self.reply_topic = f"{config.prefix}/status/reply"  # for boards it does not serve
         self.outbox = Outbox(QUEUE_LIMIT if queue_limit is None else queue_limit, self._dropped)
         self.tls = tls_context(config)
         self.taps = [BoardTap(self, s) for s in services]
@@ -633,6 +638,10 @@ class MqttBridge:
 
     async def _execute(self, board: str, op: str, payload: object) -> None:
         ident: object = None
+        names = [s.name for s in self.services]
+        if board not in names:
+            self._unknown_board(board, op, payload, names)
+            return
         try:
             request = _arguments(payload)
             ident = request.get("id")
@@ -650,6 +659,27 @@ class MqttBridge:
             data = _encode({"id": None, "ok": False, "error": f"bad request: {exc}"})
         topic = f"{self.config.prefix}/{board}/reply/{op}"
         self.outbox.put("reply", topic, lambda: data, QOS_OTHER)
+
+    def _unknown_board(self, board: str, op: str, payload: object, names: list[str]) -> None:
+        """A command for a board this daemon does not serve is not run (whatever the op), and
+        is answered on ``<prefix>/status/reply``, never on a topic made of the unknown name:
+        ``{"id": 3, "ok": false, "error": "no board 'zz'; boards: xy", "board": "zz", "op":
+        "state"}``."""
+        ident: object = None
+        with contextlib.suppress(ControlError):
+            ident = _arguments(payload).get("id")
+        reply = {
+            "id": ident,
+            "ok": False,
+            "error": f"no board {board!r}; boards: {', '.join(names)}",
+            "board": board,
+            "op": op,
+        }
+        try:
+            data = _encode(reply)
+        except (TypeError, ValueError):
+            data = _encode({**reply, "id": None})
+        self.outbox.put("reply", self.reply_topic, lambda: data, QOS_OTHER)
 
 
 def _arguments(payload: object) -> dict[str, Any]:

@@ -7,20 +7,26 @@ board said to every client attached to it. Between those moments nothing runs: a
 costs nothing (no tick loop).
 
 The board is a card in a PC: it outlives every client. Clients come and go (a program opens and
-closes the pty, a TCP connection drops mid-command); the board keeps its state, and what a
-client wrote before it vanished is still passed on in order.
+closes the pty, a TCP connection drops mid-command); the board keeps its state and its motion.
 
-A board has one data port but may be reachable on several endpoints (by default a TCP port and
-a pty). What the board says goes to the client that last wrote to it: that is the program
-holding the conversation, and a pty nobody has open does not fill up with another client's
-replies. The traffic log shows everything.
+Each connection is a *session* (a TCP connection; the time between a pty's first open and its
+last close): what the board produces in answer to a session's bytes belongs to that session
+(replies, the driver's ``# ! @ $`` markers for the commands it sent, the motion it started), and
+goes to its client only (:attr:`omsd.link.LinkOutput.pieces`). When a client goes, what it wrote
+that the board has not taken yet (held by a driver wait, or waiting for room) is dropped, its
+wait ends, and what the board still says for it is discarded; each is logged with a count. The
+board's own doing (session 0) goes to the client that last wrote. A TCP client that shuts down
+only its sending side is kept until what it sent is done (``linger``). The traffic log shows
+everything.
 """
 
 from __future__ import annotations
 
 import asyncio
+import itertools
 import time
 import traceback
+from collections import OrderedDict, deque
 from typing import Protocol
 
 from omsd.board import Board
@@ -35,12 +41,16 @@ from omsd.timebase import Timebase
 FEED_BITE = 4096
 #: Host bytes a faulty cable holds in flight (paced or damaged) before it drops more.
 MAX_IN_FLIGHT = 64 * 1024
+#: Labels of gone sessions remembered for the log (what is discarded for them later).
+GONE_LABELS = 256
 
 
 class Client(Protocol):
-    """An endpoint connection as the service sees it."""
+    """An endpoint connection as the service sees it. ``session`` is given by the service
+    (:meth:`BoardService.attach`, :meth:`BoardService.open_session`)."""
 
     label: str
+    session: int
 
     def send(self, data: bytes) -> None:
         """Bytes for the host."""
@@ -48,6 +58,19 @@ class Client(Protocol):
 
     def input_room(self) -> None:
         """The link may take more of what this client has written: try again."""
+        ...
+
+
+class Lingering(Client, Protocol):
+    """A client that has shut down its sending side and waits for its answers."""
+
+    @property
+    def unsent(self) -> int:
+        """Bytes it wrote that the link has not taken yet."""
+        ...
+
+    def finish(self) -> None:
+        """Close, after what has been sent to it is written."""
         ...
 
 
@@ -93,39 +116,107 @@ class BoardService:
         )
         self.clients: list[Client] = []
         self._waiting: list[Client] = []
-        self.active: Client | None = None  # the client that last wrote: it gets the output
+        self.active: Client | None = None  # the client that last wrote: the board's own output
         self._timer: asyncio.TimerHandle | None = None
-        self._orphan = bytearray()
         self._closed = False
+        self._sessions = itertools.count(1)
+        self._live: dict[int, Client] = {}  # session -> its client, while it is there
+        self._gone: OrderedDict[int, str] = OrderedDict()  # session -> label, recently gone
+        self._inbound_sessions: deque[list[int]] = deque()  # [session, count] of _inbound
+        self._lingering: dict[int, tuple[Lingering, asyncio.TimerHandle]] = {}
 
     # -- clients --------------------------------------------------------------------------------
 
     def attach(self, client: Client) -> None:
         self.clients.append(client)
+        self.open_session(client)
+
+    def open_session(self, client: Client) -> int:
+        """A new conversation on ``client`` (a new connection, a pty opened again)."""
+        session = next(self._sessions)
+        client.session = session
+        self._live[session] = client
+        return session
 
     def detach(self, client: Client) -> None:
+        """The endpoint is going away (after :meth:`end_session`, or at shutdown)."""
         if client in self.clients:
             self.clients.remove(client)
+        self._forget(client)
+
+    def _forget(self, client: Client) -> None:
+        session = client.session
+        if self._live.get(session) is client:
+            del self._live[session]
+            self._gone[session] = client.label
+            while len(self._gone) > GONE_LABELS:
+                self._gone.popitem(last=False)
         if self.active is client:
             self.active = None
         if client in self._waiting:
             self._waiting.remove(client)
+        lingering = self._lingering.pop(session, None)
+        if lingering is not None:
+            lingering[1].cancel()
 
-    def orphan_input(self, data: bytes) -> None:
-        """What a client wrote and the board had not yet taken when the client went away: it is
-        still passed on, in order, as the board can take it."""
-        self._orphan += data
-        self._feed_orphan()
-        self.service()  # what the board answers goes to "(no client)", not to the next one
+    def end_session(self, client: Client, unsent: int = 0, why: str = "gone") -> None:
+        """The client went (disconnected, closed the pty, taken over, cut): what it wrote and
+        the board has not taken is dropped (``unsent`` of it never left the transport), its
+        wait ends, and from now on what the board says for it is discarded."""
+        session = client.session
+        if self._live.get(session) is not client:
+            return
+        held = self.link.held()
+        wait = held.describe() if held is not None and held.session == session else None
+        dropped = self.link.drop_input(session) + unsent
+        for run in self._inbound_sessions:
+            if run[0] == session:
+                run[0] = -1  # still on the wire; it reaches the board as nobody's
+        self._forget(client)
+        if dropped or wait:
+            because = f" ({wait})" if wait else ""
+            self.log.info(
+                f"{self.name}: {client.label} {why}: dropped {dropped} bytes of its input "
+                f"that the board had not taken{because}"
+            )
+        self.service()
 
-    def _feed_orphan(self) -> None:
-        if self._orphan:
-            taken = self.link.from_host(bytes(self._orphan), self.clock())
-            if taken:
-                label = "(disconnected client)"
-                chunk = bytes(self._orphan[:taken])
-                self._record(Traffic(time.time(), self.name, label, Direction.IN, chunk))
-            del self._orphan[:taken]
+    def power_cycle(self) -> None:
+        """Switch the card off and on (control API): the board resets, the link forgets what it
+        held."""
+        self.board.power_cycle(self.clock())
+        dropped = self.link.reset_input()
+        if dropped:
+            self.log.info(f"{self.name}: reset: dropped {dropped} bytes of held input")
+        self.service()
+
+    def session_busy(self, client: Lingering) -> bool:
+        """Something ``client`` sent is yet to be taken or done (see :meth:`Board.session_busy`)."""
+        session = client.session
+        return bool(
+            client.unsent
+            or self.link.busy(session)
+            or self.board.session_busy(session)
+            or any(run[0] == session for run in self._inbound_sessions)
+        )
+
+    def half_closed(self, client: Lingering) -> bool:
+        """``client`` shut down its sending side. True: keep it open until what it sent is
+        done (at most ``linger`` seconds), then :meth:`Lingering.finish`; False: close now."""
+        linger = self.config.linger
+        if linger <= 0 or not self.session_busy(client):
+            return False
+        timer = self.loop.call_later(linger, self._linger_over, client)
+        self._lingering[client.session] = (client, timer)
+        return True
+
+    def _linger_over(self, client: Lingering) -> None:
+        if self._lingering.pop(client.session, None) is not None:
+            self.log.info(
+                f"{self.name}: {client.label}: closed {self.config.linger:g} s after it stopped "
+                "sending, with its commands still running"
+            )
+            client.finish()
 
     def _record(self, record: Traffic) -> None:
         self.log.record(record)
@@ -142,12 +233,9 @@ class BoardService:
             return len(data)  # into a cut cable: lost
         if faults.damaging or faults.baud is not None:
             return self._feed_faulty(client, data)
-        self._feed_orphan()
-        taken = 0
-        if not self._orphan:  # a vanished client's bytes go first
-            # a bite at a time: a client that wrote megabytes gets the rest taken on later
-            # turns of the loop, so the other boards are served in between
-            taken = self.link.from_host(data[:FEED_BITE], self.clock())
+        # a bite at a time: a client that wrote megabytes gets the rest taken on later turns of
+        # the loop, so the other boards are served in between
+        taken = self.link.from_host(data[:FEED_BITE], self.clock(), client.session)
         if taken:
             self.active = client
             chunk = data[:taken]
@@ -166,7 +254,14 @@ class BoardService:
             return 0  # the wire is full: the client waits (input_room when it drains)
         data = data[:room]
         self._record(Traffic(time.time(), self.name, client.label, Direction.IN, data))
-        self._inbound += self.faults.damage(data)
+        damaged = self.faults.damage(data)
+        self._inbound += damaged
+        runs = self._inbound_sessions
+        if damaged:
+            if runs and runs[-1][0] == client.session:
+                runs[-1][1] += len(damaged)
+            else:
+                runs.append([client.session, len(damaged)])
         if client not in self._waiting:
             self._waiting.append(client)
         self._drain_inbound()
@@ -177,18 +272,23 @@ class BoardService:
         if self._closed or not self._inbound:
             return
         cps = self.faults.chars_per_second
-        n = len(self._inbound) if cps is None else 1
-        taken = self.link.from_host(bytes(self._inbound[:n]), self.clock())
+        runs = self._inbound_sessions
+        session, length = runs[0]
+        n = length if cps is None else 1
+        taken = self.link.from_host(bytes(self._inbound[:n]), self.clock(), max(session, 0))
         del self._inbound[:taken]
+        runs[0][1] -= taken
+        if not runs[0][1]:
+            runs.popleft()
         self.service()
         if self._inbound:
             delay = 1.0 / cps if cps is not None and taken else 0.005
             self._in_timer = self.loop.call_later(delay, self._drain_inbound)
 
-    def _deliver(self, client: Client | None, data: bytes) -> None:
+    def _deliver(self, client: Client, data: bytes) -> None:
         """Output on its way to the host, through whatever faults the cable has."""
         faults = self.faults
-        if not faults.cable or client is None:
+        if not faults.cable:
             return
         data = faults.damage(data)
         if not data:
@@ -209,7 +309,7 @@ class BoardService:
     def _send_later(self, client: Client, data: bytes) -> None:
         if self._closed or not self.faults.cable:
             return
-        if client in self.clients:
+        if self._live.get(client.session) is client:
             client.send(data)
 
     def set_faults(self, faults: Faults) -> None:
@@ -217,6 +317,7 @@ class BoardService:
         self.faults = faults
         if not faults.cable:
             self._inbound.clear()
+            self._inbound_sessions.clear()
             for client in list(self.clients):
                 cut = getattr(client, "cut", None)
                 if cut is not None:
@@ -236,23 +337,40 @@ class BoardService:
             self.log.error(f"{self.name}: board engine failed:\n{traceback.format_exc()}")
             self._reschedule()
             return
+        for note in self.link.take_notes():
+            self.log.info(f"{self.name}: {self.link.kind} link: {note}")
         for event in out.events:
             self.log.event(time.time(), self.name, describe(event))
             for observer in list(self.observers):
                 observer.event(self, now, event)
-        if out.data:
-            client = self.active
-            label = client.label if client is not None else "(no client)"
-            self._record(Traffic(time.time(), self.name, label, Direction.OUT, out.data))
-            self._deliver(client, out.data)
-        if self._orphan:
-            self._feed_orphan()
-        if self._waiting and self.link.room() > 0:
+        for session, data in out.pieces:
+            self._route(session, data)
+        if self._waiting:
             # never call back into a client from here: a client may be inside feed()
-            waiting, self._waiting = self._waiting, []
-            for client in waiting:
+            room = self.link.room
+            ready = [c for c in self._waiting if room(c.session) > 0]
+            for client in ready:
+                self._waiting.remove(client)
                 self.loop.call_soon(client.input_room)
+        if self._lingering:
+            for lingering, _ in list(self._lingering.values()):
+                if not self.session_busy(lingering):
+                    self._forget(lingering)
+                    lingering.finish()
         self._reschedule()
+
+    def _route(self, session: int, data: bytes) -> None:
+        """Output of ``session`` to its client; the board's own (0) to the last writer."""
+        client = self._live.get(session) if session else self.active
+        if client is not None:
+            self._record(Traffic(time.time(), self.name, client.label, Direction.OUT, data))
+            self._deliver(client, data)
+            return
+        gone = self._gone.get(session) if session else None
+        label = f"(gone: {gone})" if gone is not None else "(no client)"
+        self._record(Traffic(time.time(), self.name, label, Direction.OUT, data))
+        if gone is not None:
+            self.log.info(f"{self.name}: discarded {len(data)} bytes for {gone}: it has gone")
 
     def _reschedule(self) -> None:
         if self._timer is not None:

@@ -58,8 +58,12 @@ Choices where the issue is silent:
   moved over the old file with ``os.replace``, and the directory fsynced. A failure at any
   step leaves the old file intact and no temporary file behind, and raises
   :class:`StateFileError` (one line); the saved state seen by :meth:`StateFile.board` is then
-  unchanged. Missing parent directories are created. A new file gets mode 0644; an existing
-  one keeps its mode.
+  unchanged. Missing parent directories are created. A new file gets mode 0600, or 0640 and
+  the group given (``[state] group``); an existing one keeps its mode (and is given the group).
+* A save cut short by a crash (SIGKILL, power) between creating the temporary file and the
+  rename leaves it behind, ``.<name>.XXXXXXXX.tmp``: :meth:`StateFile.load` removes such files
+  (regular files of this user, named exactly as :func:`tempfile.mkstemp` names them for this
+  file) and says how many in its message. Nothing else in the directory is touched.
 * One daemon owns the file: nothing locks it against a second process, and a second daemon
   writing the same file would overwrite the first one's boards with what it read at its start.
   Give each daemon its own file. Within a daemon, saves may run on worker threads
@@ -79,6 +83,7 @@ import contextlib
 import copy
 import json
 import os
+import re
 import stat
 import tempfile
 import threading
@@ -86,10 +91,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn
 
+from omsd.files import file_mode, group_id
+
 FORMAT = 1
 PERMANENT_MACROS = range(5, 25)  # PT: "must be between 5 and 24"
 MACRO_LENGTH = 250  # MD: "Be careful not to exceed 250 ASCII characters"
-NEW_FILE_MODE = 0o644
+NEW_FILE_MODE = 0o600  # 0o640 with a group (omsd.files.file_mode)
 CORRUPT_SUFFIX = ".corrupt"
 
 
@@ -183,8 +190,9 @@ def _encode(flash: BoardFlash) -> dict[str, Any]:
 class StateFile:
     """The flash memory of every board of one daemon, in the file at ``path``."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, group: str | None = None) -> None:
         self.path = Path(path)
+        self.group = group  # a group to give the file to (then a new file is 0640)
         self._document: dict[str, Any] = {"format": FORMAT, "boards": {}}
         self._flash: dict[str, BoardFlash] = {}
         self._loaded = False
@@ -201,40 +209,69 @@ class StateFile:
             self._document = {"format": FORMAT, "boards": {}}
             self._flash = {}
             self._set_aside = False
+            removed = self._remove_leftovers()
+            result = self._read()
+            if not removed:
+                return result
+            note = f"removed {removed} temporary file{'s' * (removed > 1)} left by a save cut short"
+            if result.message is None:
+                return LoadResult(result.ok, self._say(note))
+            return LoadResult(result.ok, f"{result.message}; {note}")
+
+    def _remove_leftovers(self) -> int:
+        """Remove the temporary files of saves that a crash cut short (see the module text);
+        how many were removed."""
+        pattern = re.compile(re.escape(f".{self.path.name}.") + r"[a-z0-9_]{8}\.tmp")
+        try:
+            names = os.listdir(self.path.parent)
+        except OSError:
+            return 0
+        removed = 0
+        for name in names:
+            if not pattern.fullmatch(name):
+                continue
+            leftover = self.path.parent / name
             try:
-                data = self.path.read_bytes()
-            except FileNotFoundError:
-                return LoadResult(
-                    True, self._say("not found; using factory defaults (the first save creates it)")
-                )
-            except OSError as exc:
-                self._set_aside = self.path.is_file()
-                reason = exc.strerror or str(exc)
-                return LoadResult(
-                    False, self._say(f"cannot read: {reason}; using factory defaults")
-                )
+                st = os.lstat(leftover)
+                if stat.S_ISREG(st.st_mode) and st.st_uid == os.geteuid():
+                    os.unlink(leftover)
+                    removed += 1
+            except OSError:
+                continue
+        return removed
+
+    def _read(self) -> LoadResult:
+        """Read and check the file (for :meth:`load`, under its lock)."""
+        try:
+            data = self.path.read_bytes()
+        except FileNotFoundError:
+            return LoadResult(
+                True, self._say("not found; using factory defaults (the first save creates it)")
+            )
+        except OSError as exc:
+            self._set_aside = self.path.is_file()
+            reason = exc.strerror or str(exc)
+            return LoadResult(False, self._say(f"cannot read: {reason}; using factory defaults"))
+        try:
+            document = self._parse(data)
+        except _Invalid as exc:
+            self._set_aside = True
+            kept = self.path.with_name(self.path.name + CORRUPT_SUFFIX)
+            return LoadResult(
+                False,
+                self._say(f"{exc}; using factory defaults (the next save keeps it as {kept.name})"),
+            )
+        self._document = document
+        bad: list[str] = []
+        for name, section in document["boards"].items():
             try:
-                document = self._parse(data)
+                self._flash[name] = _board_flash(section)
             except _Invalid as exc:
-                self._set_aside = True
-                kept = self.path.with_name(self.path.name + CORRUPT_SUFFIX)
-                return LoadResult(
-                    False,
-                    self._say(
-                        f"{exc}; using factory defaults (the next save keeps it as {kept.name})"
-                    ),
-                )
-            self._document = document
-            bad: list[str] = []
-            for name, section in document["boards"].items():
-                try:
-                    self._flash[name] = _board_flash(section)
-                except _Invalid as exc:
-                    bad.append(f"board {json.dumps(name)}: {exc}")
-            if bad:
-                which = "that board uses" if len(bad) == 1 else "those boards use"
-                return LoadResult(False, self._say(f"{'; '.join(bad)}; {which} factory defaults"))
-            return LoadResult(True, None)
+                bad.append(f"board {json.dumps(name)}: {exc}")
+        if bad:
+            which = "that board uses" if len(bad) == 1 else "those boards use"
+            return LoadResult(False, self._say(f"{'; '.join(bad)}; {which} factory defaults"))
+        return LoadResult(True, None)
 
     def _say(self, text: str) -> str:
         return _one_line(f"state file {self.path}: {text}")
@@ -309,10 +346,12 @@ class StateFile:
         try:
             mode = stat.S_IMODE(os.stat(self.path).st_mode)
         except OSError:
-            mode = NEW_FILE_MODE
+            mode = file_mode(self.group)
         fd, temporary = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=directory)
         try:
             try:
+                if self.group is not None:
+                    os.fchown(fd, -1, group_id(self.group))
                 os.fchmod(fd, mode)
                 view = memoryview(data)
                 while view:

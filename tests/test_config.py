@@ -4,6 +4,7 @@ and every error as one line that names the file (or option) and the key."""
 from __future__ import annotations
 
 import dataclasses
+import grp
 import os
 import re
 from pathlib import Path
@@ -24,6 +25,7 @@ from omsd.config import (
     default_pty_link,
     from_options,
     load_config,
+    runtime_directory,
     with_state_option,
 )
 from omsd.models import MODELS
@@ -158,7 +160,8 @@ def test_example_lab_setup_shows_every_key() -> None:
     text = (CONFIG_DIR / "omsd.toml").read_text()
     keys = [
         *("file", "view", "name", "model", "link", "eos", "buffer", "tcp", "pty"),
-        *("group", "mode", "second_client", "inputs", "encoders", "serial", "firmware"),
+        *("group", "mode", "second_client", "linger", "inputs", "encoders", "serial"),
+        "firmware",
         *(f.name for f in dataclasses.fields(AxisWorld)),
     ]
     code = "\n".join(line.split("#", 1)[0] for line in text.splitlines())
@@ -805,11 +808,11 @@ def test_state_file_in_a_file(tmp_path: Path, value: str, expected: str) -> None
         ('[state]\nfile = ""\n', "state.file: expected a path, got ''"),
         (
             '[state]\npath = "x"\n',
-            "state.path: unknown key; expected one of file",
+            "state.path: unknown key; expected one of file, group",
         ),
         (
             '[state]\nfiles = "x"\n',
-            "state.files: unknown key (did you mean 'file'?); expected one of file",
+            "state.files: unknown key (did you mean 'file'?); expected one of file, group",
         ),
         (
             '[log]\nfile = "same"\n[state]\nfile = "./same"\n',
@@ -889,3 +892,78 @@ def test_state_command_line_error_is_a_configuration_error(
 ) -> None:
     assert cli.main(["--tcp", "0", "--state", ""]) == 2
     assert capsys.readouterr().err == "omsd: --state: expected a path, got ''\n"
+
+
+# -- linger: how long a half-closed TCP client is kept for its answers -------------------------
+
+
+def test_linger_defaults_to_a_minute_and_takes_seconds(tmp_path: Path) -> None:
+    (default,) = load_config(write(tmp_path, "[[board]]\ntcp = 7001\n")).boards
+    assert default.linger == 60.0
+    (given,) = load_config(write(tmp_path, "[[board]]\ntcp = 7001\nlinger = 2.5\n")).boards
+    assert given.linger == 2.5
+    (off,) = load_config(write(tmp_path, "[[board]]\ntcp = 7001\nlinger = 0\n")).boards
+    assert off.linger == 0.0
+
+
+@pytest.mark.parametrize("value", ["-1", "3601", '"60"', "true", "nan"])
+def test_linger_out_of_range_or_not_a_number_is_refused(tmp_path: Path, value: str) -> None:
+    message = load_error(tmp_path, f"[[board]]\ntcp = 7001\nlinger = {value}\n")
+    assert "board[0].linger: expected a number of seconds 0..3600, got" in message, message
+
+
+# -- issue 13: the group of the log and state files -----------------------------------------
+
+
+def _my_group() -> str:
+    return grp.getgrgid(os.getegid()).gr_name
+
+
+def test_log_and_state_groups(tmp_path: Path) -> None:
+    group = _my_group()
+    config = load_config(
+        write(
+            tmp_path,
+            f'[log]\nfile = "t.jsonl"\ngroup = "{group}"\n'
+            f'[state]\nfile = "s.state"\ngroup = "{group}"\n' + MINIMAL,
+        )
+    )
+    assert (config.log.group, config.state_group) == (group, group)
+    plain = load_config(write(tmp_path, MINIMAL))
+    assert (plain.log.group, plain.state_group) == (None, None)
+
+
+@pytest.mark.parametrize("table", ["log", "state"])
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        (
+            '"no-such-group-omsd"',
+            "expected the name of an existing group, got 'no-such-group-omsd'",
+        ),
+        ("0", "expected a non-empty string, got 0"),
+        ('""', "expected a non-empty string, got ''"),
+    ],
+)
+def test_a_bad_group_is_one_line_naming_the_key(
+    tmp_path: Path, table: str, value: str, expected: str
+) -> None:
+    message = load_error(tmp_path, f"[{table}]\ngroup = {value}\n" + MINIMAL)
+    assert message == f"{tmp_path / 'omsd.toml'}: {table}.group: {expected}"
+
+
+def test_a_group_the_daemon_is_not_in_is_refused(tmp_path: Path) -> None:
+    if os.geteuid() == 0:
+        pytest.skip("root may give a file to any group")
+    mine = {os.getegid(), *os.getgroups()}
+    other = next((g for g in grp.getgrall() if g.gr_gid not in mine), None)
+    if other is None:
+        pytest.skip("this user is in every group")
+    message = load_error(tmp_path, f'[log]\ngroup = "{other.gr_name}"\n' + MINIMAL)
+    assert f"log.group: expected a group that omsd's user (uid {os.geteuid()})" in message
+
+
+def test_the_runtime_directory_holds_the_default_links(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("XDG_RUNTIME_DIR", "/run/user/1234")
+    assert runtime_directory() == Path("/run/user/1234/omsd")
+    assert default_pty_link("xy").parent == runtime_directory()

@@ -7,7 +7,8 @@ subscriber is aiomqtt. The `[mqtt]` configuration is tested here too.
 
 Times are compared on the board's clock, not the wall clock: a move "completes at the right
 time" when its done event falls within the board-time window in which the command arrived, plus
-the move's duration on a Harness (omsd.board.harness), to the board's 2048 samples a second.
+the move's duration worked out from the PC48 manual (``MOVE_TIMES``), to the board's 2048 samples
+a second.
 """
 
 from __future__ import annotations
@@ -29,8 +30,6 @@ import pytest
 from amqtt.broker import Broker
 
 import omsd.mqtt
-from omsd.board.events import DoneEvent
-from omsd.board.harness import Harness
 from omsd.board.world import AxisWorld
 from omsd.config import (
     BoardConfig,
@@ -44,6 +43,7 @@ from omsd.config import (
 from omsd.control.protocol import OPS
 from omsd.control.server import ControlServer
 from omsd.daemon import Daemon, StartupError
+from omsd.models import get_model
 from omsd.mqtt import Message, Outbox
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
@@ -333,9 +333,19 @@ class Running:
 
 @contextlib.asynccontextmanager
 async def running(
-    port: int, world: dict[str, AxisWorld] | None = None, **mqtt: Any
+    port: int,
+    world: dict[str, AxisWorld] | None = None,
+    model: str = "PC48-4E",
+    link: str = "driver",
+    **mqtt: Any,
 ) -> AsyncIterator[Running]:
-    board = BoardConfig(name="xy", tcp=(TcpEndpoint("127.0.0.1", 0),), world=world or {})
+    board = BoardConfig(
+        name="xy",
+        model=model,
+        link=link,
+        tcp=(TcpEndpoint("127.0.0.1", 0),),
+        world=world or {},
+    )
     config = DaemonConfig(
         boards=(board,),
         control=ControlConfig(socket=None, explicit=True),
@@ -364,13 +374,22 @@ async def connected(run: Running) -> None:
             await asyncio.sleep(0.01)
 
 
+# Seconds from a move's GO, executed on a sample tick, to its done event: PC48 §1.3's linear ramp
+# at the power-up AC of 1,000,000 steps/s^2 is a trapezoid taking d/VL + VL/AC when d >= VL^2/AC,
+# and the move is done on the first 2048/s sample tick at or after that (docs/decisions.md).
+MOVE_TIMES = {
+    # 900/900 + 900/1e6 = 1.0009 s = 2049.84 ticks -> tick 2050
+    "AX VL900 MR900 GO ID ": 2050 / 2048,
+    # 2000/5000 + 5000/1e6 = 0.405 s = 829.44 ticks -> tick 830
+    "AX VL5000 MR2000 GO ID ": 830 / 2048,
+    # 4000/2000 + 2000/1e6 = 2.002 s = 4100.10 ticks -> tick 4101
+    "AX VL2000 MR4000 GO ID ": 4101 / 2048,
+}
+
+
 def move_time(command: str) -> float:
-    """Seconds from ``command`` to its done event, on a manual clock."""
-    h = Harness("PC48-4E")
-    h.send(command)
-    h.run()
-    (done,) = [e for e in h.events() if isinstance(e, DoneEvent)]
-    return done.time
+    """Seconds from ``command`` to its done event (``MOVE_TIMES``)."""
+    return MOVE_TIMES[command]
 
 
 async def start_move(run: Running, command: str) -> tuple[float, float]:
@@ -555,12 +574,12 @@ async def test_command_errors_come_back_on_the_reply_topic(broker: int) -> None:
         await sub.publish("omsd/xy/cmd/home", {"id": 5, "axis": "X", "active": "yes"})
         await sub.publish("omsd/xy/cmd/state", {"id": 6, "board": "zz", "op": "reset"})
         await sub.wait("xy/reply/state")
-        replies = [(m.topic, m.json()) for m in sub.messages if "/reply/" in m.topic]
+        replies = [(m.topic, m.json()) for m in sub.messages if "/reply" in m.topic]
         assert [(t, r["id"], r["ok"]) for t, r in replies] == [
             ("omsd/xy/reply/limit", None, False),
             ("omsd/xy/reply/limit", None, False),
             ("omsd/xy/reply/nope", 2, False),
-            ("omsd/zz/reply/state", 3, False),
+            ("omsd/status/reply", 3, False),  # no board zz: the daemon's topic (issue 13)
             ("omsd/xy/reply/limit", 4, False),
             ("omsd/xy/reply/home", 5, False),
             ("omsd/xy/reply/state", 6, True),  # the topic's board and op win
@@ -729,3 +748,144 @@ async def test_a_broker_that_goes_away_mid_move_loses_nothing_and_comes_back() -
     finally:
         if first is not None:
             await first.shutdown()
+
+
+# -- issue 12: a limit after homing is seen everywhere ------------------------------------------
+
+LIMITED = AxisWorld(negative_limit=-30000, positive_limit=30000, home_low=1000, home_high=1100)
+
+
+def _status_reply(model: str, link: str, status: str) -> bytes:
+    """RA/QA as each link shows it: the driver's text and end character; on the raw link the
+    PC48's ``<LF><CR><CR>…<LF><CR><CR>`` (§6.13), the PCIx's ``text<LF><CR>``."""
+    if link == "driver":
+        return status.encode() + b"\n"
+    if model.startswith("PCIX"):
+        return status.encode() + b"\n\r"
+    return b"\n\r\r" + status.encode() + b"\n\r\r"
+
+
+@pytest.mark.parametrize("link", ["driver", "raw"])
+@pytest.mark.parametrize("model", ["PC48-4E", "PCIX-040"])
+async def test_a_homed_axis_run_into_each_limit_reads_it_everywhere(
+    broker: int, model: str, link: str
+) -> None:
+    """Issue 12, done when: "A PCIx and a PC48 axis homed, then run into each limit, read the
+    limit in every query, over both links, through the control API and in MQTT state." The
+    issue's world (limits at +-30000, home 1000..1100) and commands: ``AX VL7000 AC50000 HM0``
+    finds home between two steps (the counter and the carriage 0.234 step apart), then JG5000
+    runs into the +30000 switch (before the fix: stopped at 28999 and read ``PNNN``) and JG-5000
+    into the -30000 one. The board's time is paused and stepped (control API), so every move
+    starts on the same sample ticks as on a manual clock."""
+    pcix = model.startswith("PCIX")
+    sep = ";" if pcix else " "
+
+    async def ask(command: str, expected: bytes) -> None:
+        await run.send(command + sep)
+        got = b""
+        while len(got) < len(expected):
+            got += await run.read_until(expected[-1:])
+        assert got == expected, (command, got)
+
+    wy = get_model(model).who_are_you()
+    if link == "driver":
+        answer = wy.encode() + b"\n"
+    else:
+        answer = wy.encode() + b"\n\r" if pcix else b"\n\r" + wy.encode() + b"\n\r"
+
+    async def run_for(seconds: float, *commands: str) -> None:
+        """Send, know the board has it (WY's answer comes after it), let board time pass."""
+        await ask(sep.join([*commands, "WY"]), answer)
+        await run.control("time", action="step", seconds=seconds)
+
+    async with running(broker, {"X": LIMITED}, model=model, link=link) as run:
+        await connected(run)
+        await run.control("time", action="pause")
+        async with subscribed(broker) as sub:
+            await run_for(2.0, "AX", "VL7000", "AC50000", "HM0")
+            for direction, letter, key in ((1, "P", "limit_positive"), (-1, "M", "limit_negative")):
+                await run_for(15.0, f"JG{direction * 5000}")
+                if link == "driver":  # the limit interrupt's marker (§7.3.3)
+                    assert await run.read_until(b"\n") == b"@\n"
+                status = f"{letter}NLN"
+                for query in ("RA", "QA"):
+                    await ask(query, _status_reply(model, link, status))
+                if pcix:
+                    # QL: the limit input at its LL (active low) level, 0; the others high
+                    bit = 0 if direction < 0 else 8
+                    word = 0xFFFF & ~(1 << bit) & ~0xF0F0  # four axes: bits 0-3 and 8-11
+                    ql = f"{word:04x}".encode()
+                    await ask("QL", ql + (b"\n" if link == "driver" else b"\n\r"))
+                control = await run.control("state")
+                assert control["axes"]["X"][key] is True
+                assert control["axes"]["X"]["moving"] is False
+                published = await sub.wait(
+                    "xy/state", lambda s, key=key: s["axes"]["X"][key] is True
+                )
+                assert published.json()["axes"]["X"]["moving"] is False
+
+
+# -- issue 13: a command for a board that does not exist ----------------------------------------
+
+
+async def test_a_command_for_an_unknown_board_is_answered_on_the_status_reply_topic(
+    broker: int,
+) -> None:
+    """Issue 13: "MQTT requests for a board that does not exist are answered on the daemon's
+    status topic, not on a topic built from the unknown name". Nothing is run (not even an op
+    that needs no board) and nothing is published under the unknown name."""
+    async with running(broker) as run, subscribed(broker) as sub:
+        await connected(run)
+        await sub.wait("xy/state")
+        await sub.publish("omsd/zz/cmd/state", {"id": 3})
+        await sub.publish("omsd/zz/cmd/boards", {"id": "b"})
+        await sub.publish("omsd/status/cmd/reset", b"{not json")
+        await sub.publish("omsd/xy/cmd/state", {"id": 4})  # a known board: its own topic
+        await sub.wait("xy/reply/state")
+        replies = [(m.topic, m.json(), m.retain) for m in sub.messages if "reply" in m.topic]
+        assert replies == [
+            (
+                "omsd/status/reply",
+                {
+                    "id": 3,
+                    "ok": False,
+                    "error": "no board 'zz'; boards: xy",
+                    "board": "zz",
+                    "op": "state",
+                },
+                False,
+            ),
+            (
+                "omsd/status/reply",
+                {
+                    "id": "b",
+                    "ok": False,
+                    "error": "no board 'zz'; boards: xy",
+                    "board": "zz",
+                    "op": "boards",
+                },
+                False,
+            ),
+            (
+                "omsd/status/reply",
+                {
+                    "id": None,
+                    "ok": False,
+                    "error": "no board 'status'; boards: xy",
+                    "board": "status",
+                    "op": "reset",
+                },
+                False,
+            ),
+            ("omsd/xy/reply/state", replies[3][1], False),
+        ]
+        assert replies[3][1]["id"] == 4 and replies[3][1]["ok"] is True
+        published = {m.topic for m in sub.messages} - {"omsd/zz/cmd/state", "omsd/zz/cmd/boards"}
+        assert not {t for t in published if t.startswith("omsd/zz/")}
+        assert not {t for t in published if t.startswith("omsd/status/") and "/cmd/" not in t} - {
+            "omsd/status/reply"
+        }
+        # the retained status is still the daemon's own
+        async with subscribed(broker) as late:
+            status = await late.wait("omsd/status")
+            assert (status.payload, status.retain) == (b"online", True)

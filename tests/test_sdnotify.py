@@ -192,7 +192,7 @@ async def test_daemon_notifies_ready_then_stopping(
             port = int(line.split(":")[-1])
             reader, writer = await asyncio.open_connection("127.0.0.1", port)
             writer.write(b"WY")
-            assert (await asyncio.wait_for(reader.readline(), 5)).startswith(b"PC48 ver ")
+            assert await asyncio.wait_for(reader.readline(), 5) == b"PC48 ver 3.00-4\n"
             writer.close()
             await writer.wait_closed()
             proc.send_signal(signal.SIGTERM)

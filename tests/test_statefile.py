@@ -4,9 +4,11 @@ read without ever raising and written atomically."""
 from __future__ import annotations
 
 import errno
+import grp
 import json
 import os
 import stat
+import tempfile
 import threading
 from pathlib import Path
 from typing import Any
@@ -123,14 +125,20 @@ def test_missing_parent_directories_are_created(tmp_path: Path) -> None:
     assert loaded(path)[0].board("a") == BoardFlash({"v": 1}, {})
 
 
-def test_a_new_file_is_0644_and_an_existing_one_keeps_its_mode(tmp_path: Path) -> None:
+def test_a_new_file_is_0600_and_an_existing_one_keeps_its_mode(tmp_path: Path) -> None:
+    """Issue 13: the state file was created world-readable (0644); it is private now, whatever
+    the umask. A mode the operator gave it stays."""
     path = tmp_path / "omsd.state"
     state, _ = loaded(path)
-    state.save_board("a", BoardFlash())
-    assert stat.S_IMODE(path.stat().st_mode) == 0o644
-    path.chmod(0o600)
-    state.save_board("a", BoardFlash({"v": 1}, {}))
+    old = os.umask(0o022)
+    try:
+        state.save_board("a", BoardFlash())
+    finally:
+        os.umask(old)
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    path.chmod(0o644)
+    state.save_board("a", BoardFlash({"v": 1}, {}))
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644
 
 
 def test_saves_from_several_threads_lose_no_board(tmp_path: Path) -> None:
@@ -467,3 +475,86 @@ def test_reading_or_saving_before_load_is_a_mistake(tmp_path: Path) -> None:
     with pytest.raises(RuntimeError):
         state.save_board("a", BoardFlash())
     assert list(tmp_path.iterdir()) == []
+
+
+# -- issue 13: the file's permissions, and what a crash leaves ----------------------------------
+
+
+def a_group() -> grp.struct_group:
+    """A group this process may give its files to, other than its own if it can (root: any)."""
+    if os.geteuid() == 0:
+        candidates = [g.gr_gid for g in grp.getgrall() if g.gr_gid != os.getegid()]
+    else:
+        candidates = [g for g in os.getgroups() if g != os.getegid()]
+    return grp.getgrgid(candidates[0] if candidates else os.getegid())
+
+
+def test_with_a_group_a_new_file_is_0640_in_that_group(tmp_path: Path) -> None:
+    group = a_group()
+    path = tmp_path / "omsd.state"
+    state = StateFile(path, group=group.gr_name)
+    state.load()
+    old = os.umask(0o077)  # systemd's UMask=0077: the mode is set, not left to the umask
+    try:
+        state.save_board("a", BoardFlash())
+    finally:
+        os.umask(old)
+    st = path.stat()
+    assert (stat.S_IMODE(st.st_mode), st.st_gid) == (0o640, group.gr_gid)
+    state.save_board("a", BoardFlash({"v": 1}, {}))  # every save writes a new file: the same
+    st = path.stat()
+    assert (stat.S_IMODE(st.st_mode), st.st_gid) == (0o640, group.gr_gid)
+
+
+def _leftover(directory: Path, name: str = "omsd.state") -> Path:
+    """What a save killed between its temporary file and the rename leaves behind: the
+    temporary file, named as the save names it."""
+    fd, temporary = tempfile.mkstemp(prefix=f".{name}.", suffix=".tmp", dir=directory)
+    os.write(fd, b'{"format": 1, "boa')
+    os.close(fd)
+    return Path(temporary)
+
+
+def test_temporary_files_left_by_a_crash_are_removed_at_the_next_load(tmp_path: Path) -> None:
+    path = tmp_path / "omsd.state"
+    saved_file(path)
+    before = path.read_bytes()
+    leftovers = [_leftover(tmp_path) for _ in range(3)]
+    # not the leftovers of this file: untouched
+    others = [
+        _leftover(tmp_path, "other.state"),
+        tmp_path / ".omsd.state.notours.tmp",
+        tmp_path / "omsd.state.tmp",
+        tmp_path / ".omsd.state.abcdefgh.tmp.keep",
+    ]
+    for other in others[1:]:
+        other.write_text("someone else's")
+    state, result = loaded(path)
+    assert result.ok
+    assert one_line(result, path) == "removed 3 temporary files left by a save cut short"
+    assert not any(p.exists() for p in leftovers)
+    assert all(p.exists() for p in others)
+    assert path.read_bytes() == before
+    assert state.board("a") == BoardFlash(DEFAULTS, MACROS)
+    # and the next load has nothing to say
+    assert loaded(path)[1] == LoadResult(True, None)
+
+
+def test_a_leftover_is_removed_whatever_else_the_load_says(tmp_path: Path) -> None:
+    path = tmp_path / "omsd.state"
+    _leftover(tmp_path)
+    _, result = loaded(path)
+    assert result.ok
+    assert one_line(result, path) == (
+        "not found; using factory defaults (the first save creates it);"
+        " removed 1 temporary file left by a save cut short"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_leftover_that_is_not_a_regular_file_is_left_alone(tmp_path: Path) -> None:
+    path = tmp_path / "omsd.state"
+    odd = tmp_path / ".omsd.state.abcdefgh.tmp"
+    odd.symlink_to(tmp_path / "elsewhere")
+    loaded(path)
+    assert odd.is_symlink()

@@ -219,10 +219,14 @@ def test_boards_endpoints_links_and_worlds(omsd_boards):
 
     port = boards.serial("servo", pty=True)  # the raw PCIx link on its pty, through pyserial
     port.write(b"WY\\n")
-    assert port.read_until(b"\\n\\r").startswith(b"PCIX-400 ver:")
+    # the WY page: "PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems", text<LF><CR> raw
+    assert port.read_until(b"\\n\\r") == (
+        b"PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems\\n\\r"
+    )
     port = boards.serial("z-stage")  # pyserial on TCP
     port.write(b"WY")
-    assert port.read_until(b"\\n").startswith(b"VS4-040 ver")
+    # VS4 WY: "<LF><CR>VS4-040 ver 1.00 S/N 123456<LF><CR>", LF-ended by the driver link
+    assert port.read_until(b"\\n") == b"VS4-040 ver 1.00 S/N 123456\\n"
     assert boards.control.state("z-stage")["io_low"] & 1  # inputs = {{0 = false}}: driven low
     assert "state file" in boards.stderr  # state=True: the daemon has one
 """

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime
+import grp
 import io
 import json
 import os
@@ -412,3 +413,92 @@ def test_sigkill_loses_at_most_the_line_in_progress(tmp_path: pathlib.Path) -> N
     if last:
         with pytest.raises(json.JSONDecodeError):
             json.loads(last)
+
+
+# -- issue 13: the file's permissions, and reopening it (logrotate) -----------------------------
+
+
+def _mode(path: pathlib.Path) -> int:
+    return path.stat().st_mode & 0o777
+
+
+def a_group() -> grp.struct_group:
+    """A group this process may give its files to, other than its own if it can (root: any)."""
+    if os.geteuid() == 0:
+        candidates = [g.gr_gid for g in grp.getgrall() if g.gr_gid != os.getegid()]
+    else:
+        candidates = [g for g in os.getgroups() if g != os.getegid()]
+    return grp.getgrgid(candidates[0] if candidates else os.getegid())
+
+
+def test_a_new_file_is_0600_whatever_the_umask(tmp_path: pathlib.Path) -> None:
+    """It was created 0644: every local user could read every byte to and from the boards."""
+    path = tmp_path / "traffic.jsonl"
+    old = os.umask(0o022)
+    try:
+        TrafficLog("off", file=path, env={}).close()
+    finally:
+        os.umask(old)
+    assert _mode(path) == 0o600
+
+
+def test_with_a_group_a_new_file_is_0640_in_that_group(tmp_path: pathlib.Path) -> None:
+    group = a_group()
+    path = tmp_path / "traffic.jsonl"
+    old = os.umask(0o077)  # systemd's UMask=0077: the mode is set, not left to the umask
+    try:
+        TrafficLog("off", file=path, env={}, group=group.gr_name).close()
+    finally:
+        os.umask(old)
+    assert (_mode(path), path.stat().st_gid) == (0o640, group.gr_gid)
+
+
+def test_an_existing_file_keeps_its_permissions(tmp_path: pathlib.Path) -> None:
+    path = tmp_path / "traffic.jsonl"
+    path.write_text("")
+    path.chmod(0o644)  # the operator's choice: omsd changes nothing it did not create
+    with TrafficLog("off", file=path, env={}, group=a_group().gr_name) as log:
+        log.info("x")
+    assert _mode(path) == 0o644 and path.stat().st_gid == os.getegid()
+
+
+def test_a_group_that_does_not_exist_leaves_no_file(tmp_path: pathlib.Path) -> None:
+    path = tmp_path / "traffic.jsonl"
+    with pytest.raises(TrafficLogError) as info:
+        TrafficLog("off", file=path, env={}, group="no-such-group-omsd")
+    assert str(info.value) == f"cannot open traffic log {path}: no group 'no-such-group-omsd'"
+    assert not path.exists()
+
+
+def test_reopen_after_a_rename_writes_a_new_file(tmp_path: pathlib.Path) -> None:
+    """What logrotate does without copytruncate: rename the file, then ask for a reopen."""
+    path = tmp_path / "traffic.jsonl"
+    rotated = tmp_path / "traffic.jsonl.1"
+    with TrafficLog("off", file=path, env={}, clock=lambda: 1.0) as log:
+        log.info("before")
+        path.rename(rotated)
+        log.info("after the rename, before the reopen")  # still the old file
+        assert log.reopen() is True
+        log.info("after the reopen")
+    assert [json.loads(line)["message"] for line in rotated.read_text().splitlines()] == [
+        "before",
+        "after the rename, before the reopen",
+    ]
+    assert [json.loads(line)["message"] for line in path.read_text().splitlines()] == [
+        "after the reopen"
+    ]
+    assert _mode(path) == 0o600
+
+
+def test_reopen_without_a_file_or_that_fails(tmp_path: pathlib.Path) -> None:
+    assert TrafficLog("off", env={}).reopen() is False
+    directory = tmp_path / "logs"
+    directory.mkdir()
+    out = io.StringIO()
+    with TrafficLog("plain", file=directory / "t.jsonl", stream=out, env={}) as log:
+        (directory / "t.jsonl").rename(tmp_path / "t.jsonl.1")
+        directory.rmdir()
+        assert log.reopen() is False  # the directory is gone: the old file goes on
+        log.info("still written")
+    assert "cannot reopen: No such file or directory" in out.getvalue()
+    assert "still written" in (tmp_path / "t.jsonl.1").read_text()

@@ -103,6 +103,7 @@ class Axis:
         self.phys_offset = world.start_position
         self.traj = Trajectory.at_rest(board.clock.origin, 0.0)
         self.stall_phys: float | None = None
+        self.source = 0  # the session whose commands the axis last ran (see Board.talker)
         self.reset(board.clock.origin, keep_position=False)
 
     # -- power-up / RS ------------------------------------------------------------------------
@@ -235,6 +236,18 @@ class Axis:
             return self.stall_phys
         return self.traj.position(t) + self.phys_offset
 
+    def carriage(self, t: float) -> float:
+        """Where the switches see the carriage: the physical position of the last whole step
+        emitted, in the frame the stop point is taken in (:meth:`settle`, :meth:`halt`). A
+        carriage stopped by a switch is therefore on the switch, whatever fraction of a step
+        the counter and the carriage are apart after HM, LP, ER or BC."""
+        if self.stall_phys is not None:
+            return self.stall_phys
+        x = self.traj.position(t)
+        if self.motion is not Motion.IDLE:
+            x = float(_steps(x, self.traj.x0))
+        return x + self.phys_offset
+
     @property
     def moving(self) -> bool:
         return self.motion is not Motion.IDLE
@@ -290,7 +303,7 @@ class Axis:
         if forced is not None:
             hit = forced
         else:
-            p = self.phys(t)
+            p = self.carriage(t)
             w = self.world
             hit = p >= w.positive_limit if direction > 0 else p <= w.negative_limit
         wiring = self.world.limit_switches
@@ -305,7 +318,7 @@ class Axis:
         forced = self.board.world.forced_home.get(self.index)
         if forced is not None:
             return forced
-        return self.world.home_low <= self.phys(t) < self.world.home_high
+        return self.world.home_low <= self.carriage(t) < self.world.home_high
 
     def home_line_low(self, t: float) -> bool:
         activated = self.home_switch_activated(t)
@@ -350,6 +363,7 @@ class Axis:
         and the tick must not show the future."""
         if self.gear is not None:  # PCIx EG: a geared axis moves only as its master does
             return
+        self.source = self.board.talker
         now = min(self.board.now, t)
         self.servo_sync(now)
         prefix = _segment(self.traj, now, t) if t > now else []
@@ -463,31 +477,36 @@ class Axis:
         return best
 
     def _levels(self, t: float) -> list[tuple[float, bool]]:
-        """Physical positions whose crossing the board must notice, with the side that counts
-        (``True``: reaching at or above the level)."""
+        """Counter-frame positions whose crossing the board must notice, with the side that
+        counts (``True``: reaching at or above the level). Switches are seen through
+        :meth:`carriage` (whole steps): a switch at physical ``s`` closes on the first whole
+        step at or beyond it, which the continuous position reaches at ``step -+ STEP_EPS``."""
         levels: list[tuple[float, bool]] = []
         w = self.world
-        p = self.phys(t)
+        p = self.carriage(t)
+        off = self.phys_offset
         if self.limits_on:
-            if p < w.positive_limit:
-                levels.append((w.positive_limit, True))
-            if p > w.negative_limit:
-                levels.append((w.negative_limit, False))
+            if p < w.positive_limit:  # active from the first step at or above the switch
+                levels.append(_step_at_or_above(w.positive_limit - off))
+            if p > w.negative_limit:  # active from the first step at or below it
+                levels.append(_step_at_or_below(w.negative_limit - off))
             if self.travel_limits is not None:  # PCIx TL
                 from omsd.board.pcix_motion import travel_levels
 
-                levels.extend(travel_levels(self, t))
+                levels.extend((level - off, above) for level, above in travel_levels(self, t))
         if self.home is not None:
             if self.home.index_points:
+                x = self.phys(t)
                 for point in self.home.index_points:
-                    levels.append((point, point > p))
+                    levels.append((point - off, point > x))
             else:
-                eps = 1e-9
+                # activated while home_low <= carriage < home_high: each edge is crossed
+                # upwards at its first step at or above it, downwards at the step below it
                 for edge in (w.home_low, w.home_high):
                     if p < edge:
-                        levels.append((edge, True))
+                        levels.append(_step_at_or_above(edge - off))
                     else:
-                        levels.append((edge - eps, False))
+                        levels.append(_step_below(edge - off))
         return levels
 
     def _first_tick(self, level_counter: float, above: bool, t_from: float) -> float | None:
@@ -510,7 +529,7 @@ class Axis:
         t = self.board.now
         best: float | None = None
         for level, above in self._levels(t):
-            tick = self._first_tick(level - self.phys_offset, above, t)
+            tick = self._first_tick(level, above, t)
             if tick is not None and (best is None or tick < best):
                 best = tick
         return best
@@ -531,6 +550,27 @@ class Axis:
         if self._cache is None:
             self._cache = self._next_event()
         return self._cache[1]
+
+
+#: How close the continuous position must come to a whole step for :func:`_steps` to count it
+#: (half its own tolerance, so that a position found at the level is counted whichever way
+#: the motion goes).
+STEP_EPS = 5e-7
+
+
+def _step_at_or_above(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first reaches ``level`` going up."""
+    return (math.ceil(level - 1e-9) - STEP_EPS, True)
+
+
+def _step_at_or_below(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first reaches ``level`` going down."""
+    return (math.floor(level + 1e-9) + STEP_EPS, False)
+
+
+def _step_below(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first goes below ``level`` going down."""
+    return (math.ceil(level - 1e-9) - 1 + STEP_EPS, False)
 
 
 def _steps(x: float, origin: float) -> int:

@@ -74,6 +74,12 @@ class Board:
         self.world = WorldState()
         self.registers = Registers(irq_or=model.irq_status_or)
         self._output: list[Output] = []
+        # Sessions (the connections a link keeps apart, see omsd.link.base): whose bytes the
+        # input buffer holds, whose conversation the output being produced belongs to (kept
+        # beside every output item), 0 for the board's own doing
+        self.input_source = 0
+        self.talker = 0
+        self._sources: list[int] = []
         self.executor = Executor(self)
         self.interpreter = Interpreter(self)
         worlds = _axis_worlds(model, world)
@@ -120,17 +126,19 @@ class Board:
         if self.model.dialect == "pcix":
             self.load_flash()
 
-    def load_flash(self) -> None:
+    def load_flash(self) -> list[str]:
         """PCIx power-up and RD: the saved defaults over the factory values, and the permanent
-        macros."""
+        macros. Returns the saved values skipped because they do not fit (``flash.apply``)."""
         from omsd.board import flash
 
         flash.factory(self)
+        problems: list[str] = []
         if self.flash_defaults is not None and self.flash_matches():
-            flash.apply(self, self.flash_defaults)
+            problems = flash.apply(self, self.flash_defaults)
         for axis in self.axes:
             axis.aux = axis.aux_default_high
         self.interpreter.macros.load_permanent(self.flash_macros)
+        return problems
 
     def flash_matches(self) -> bool:
         """Saved defaults are for this model (a board renamed onto another model in the config
@@ -163,14 +171,40 @@ class Board:
 
     # -- the data port ------------------------------------------------------------------------
 
-    def receive(self, data: bytes, now: float) -> int:
+    def receive(self, data: bytes, now: float, source: int = 0) -> int:
         """Bytes from the host. Returns how many were taken: a full input buffer (124
         characters on a PC48, while the interpreter is held by a full queue or WQ) takes no more,
         as the host would see TBE_S low; the caller keeps the rest and offers it again later.
-        Control-D (kill) and Control-Y (clear flags) bypass the interpreter."""
+        Control-D (kill) and Control-Y (clear flags) bypass the interpreter.
+
+        ``source`` names the session the bytes come from (0: the only one). The input buffer
+        holds one session's characters at a time: another session's bytes are not taken (0)
+        until the characters already there have been read, so that what the board answers can
+        be told apart (Control-D, which empties the buffer, is taken at once)."""
         self.advance(now)
         interp = self.interpreter
         buffer = interp.buffer
+        if source != self.input_source:
+            if buffer or interp.pending:
+                # the characters of another session are still there: only a Control-D, which
+                # throws them away, gets in (if there is room for it)
+                if not (data and data[0] == CONTROL_D):
+                    return 0
+                interp.pump(now)
+                if not interp.room():
+                    return 0
+            else:
+                interp.end_of_session()
+                if not interp.lexer.between_commands:
+                    # the last session's unfinished command ends where its bytes ended (as
+                    # the next character would end it on the card), and is that session's
+                    buffer.append(0x0D)
+                    interp.pump(now)
+                    self.settle(now)
+                    if buffer or interp.pending:
+                        return 0
+            self.input_source = source
+        self.talker = source
         taken = 0
         n = len(data)
         while taken < n:
@@ -205,13 +239,46 @@ class Board:
         self.advance(now)
         return taken
 
-    def input_room(self) -> int:
-        """Characters the input buffer can take now (what a host sees as TBE_S)."""
-        return self.interpreter.capacity - len(self.interpreter.buffer)
+    def input_room(self, source: int | None = None) -> int:
+        """Characters the input buffer can take now (what a host sees as TBE_S); for
+        ``source``, none while another session's characters are still in it."""
+        interp = self.interpreter
+        if source is not None and source != self.input_source and (interp.buffer or interp.pending):
+            return 0
+        return interp.capacity - len(interp.buffer)
 
     def take_output(self) -> list[Output]:
         out, self._output = self._output, []
+        self._sources = []
         return out
+
+    def take_output_sourced(self) -> tuple[list[Output], list[int]]:
+        """The output and, item by item, the session whose conversation produced it."""
+        sources = self._sources
+        out = self.take_output()
+        return out, sources
+
+    def input_busy(self, source: int) -> bool:
+        """Characters of ``source`` wait in the input buffer or the interpreter."""
+        interp = self.interpreter
+        return source == self.input_source and bool(interp.buffer or interp.pending)
+
+    def session_busy(self, source: int) -> bool:
+        """Something ``source`` sent is still to be done: characters not yet read, queued
+        commands, or motion it started (which may yet end in a done, a limit or a slip)."""
+        if self.input_busy(source):
+            return True
+        for axis in self.axes:
+            if axis.moving and axis.source == source:
+                return True
+            q = axis.queue
+            if any(op.source == source for op in q.program[q.pc :]):
+                return True
+        return False
+
+    def busy_axes(self) -> list[str]:
+        """Axes that are moving or have commands queued (what a wait for done waits on)."""
+        return [a.letter for a in self.axes if a.moving or not a.queue.empty]
 
     def take_bytes(self) -> bytes:
         """Reply bytes only, events dropped: what a raw data port would show."""
@@ -252,6 +319,7 @@ class Board:
             self.init_until = None
         ex = self.executor
         for axis in self.axes:
+            self.talker = axis.source  # what happens to an axis is the business of its mover
             for _ in range(64):
                 when = axis.next_event_time()
                 if when is None or when > t:
@@ -274,6 +342,7 @@ class Board:
                         axis.wait.until = None
                     axis.invalidate()
                 axis.invalidate()
+        self.talker = 0
 
     def settle(self, t: float) -> None:
         """Run queues and the interpreter until nothing more happens at ``t``."""
@@ -335,15 +404,22 @@ class Board:
 
     def emit(self, event: Event) -> None:
         self._output.append(event)
+        self._sources.append(self.talker)
 
     def reply(self, data: bytes, t: float) -> None:
         """Echoed characters: unframed, merged with echo just before them."""
         out = self._output
         last = out[-1] if out else None
-        if isinstance(last, Reply) and last.text is None and last.time == t:
+        if (
+            isinstance(last, Reply)
+            and last.text is None
+            and last.time == t
+            and self._sources[-1] == self.talker
+        ):
             out[-1] = Reply(t, last.data + data)
         else:
             out.append(Reply(t, data))
+            self._sources.append(self.talker)
 
     def reply_value(self, text: str, t: float) -> None:
         """ "surrounded by line feeds and carriage returns": ``<LF><CR>text<LF><CR>``."""
@@ -359,6 +435,7 @@ class Board:
         trailing = self.model.framing == "trailing"
         data = payload + b"\n\r" if trailing else frame + payload + frame
         self._output.append(Reply(t, data, payload))
+        self._sources.append(self.talker)
 
     def command_error(self, kind: ErrorKind, command: str, t: float) -> None:
         """CMD_S (PC48 Table 3-8) and, with echo on, "an English readable error message"."""

@@ -4,8 +4,11 @@ A handler receives the interpreter, the lexed command and the queue-table cell f
 mode (from the personality's data). It either acts at once (status requests, IC, UU…) or builds
 :class:`~omsd.board.queue.Op` objects and hands them to
 :meth:`~omsd.board.interpreter.Interpreter.enqueue`, which charges the slots the manual's table
-gives. Ranges are the manual's; a value outside them sets the command-error flag
-(:class:`~omsd.board.interpreter.CommandFailed`).
+gives. Operand ranges are rows of the dialect's range table (:mod:`omsd.protocol.ranges_pc48`,
+:mod:`omsd.protocol.ranges_pcix`), each quoting its manual; handlers ask
+:meth:`~omsd.board.interpreter.Interpreter.check` and
+:meth:`~omsd.board.interpreter.Interpreter.integer`, and a value outside its row sets the
+command-error flag (:class:`~omsd.board.interpreter.CommandFailed`).
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from omsd.board.interpreter import CommandFailed, Interpreter
 from omsd.board.queue import Op, SyncGroup
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.lexer import Command
-from omsd.protocol.operands import check_range
+from omsd.protocol.operands import truncate
 
 Handler = Callable[[Interpreter, Command, Cell, float], None]
 HANDLERS: dict[str, Handler] = {}
@@ -142,13 +145,20 @@ def _cn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.enqueue([(ix.axis, Op("CN", (), ix.cost(cell, ix.axis)))])
 
 
+def parabolic_steps(ix: Interpreter, value: Decimal | None, mnemonic: str) -> int:
+    """PN (and the PCIx's PR): "A parameter out of this range or no parameter supplied defaults
+    to 70% or 3 steps" — the row's default, no command error. A whole number: a fraction is
+    truncated first, as for every whole-number operand."""
+    row = ix.operand_range(mnemonic)
+    if value is not None and row.contains(truncate(value)):
+        return truncate(value)
+    assert row.default is not None
+    return int(row.default)
+
+
 @handles("PN")
 def _pn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "A parameter out of this range or no parameter supplied defaults to 70% or 3 steps."
-    value = ix.one(cmd, required=False)
-    steps = 3
-    if value is not None and 3 <= value <= 10:
-        steps = int(value)
+    steps = parabolic_steps(ix, ix.one(cmd, required=False), "PN")
     ix.board.ramp = pf.RampShape(pf.RampKind.PARABOLIC, steps)
 
 
@@ -209,7 +219,7 @@ def _se(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     items = {ix.axis_index: ix.one(cmd)} if ix.mode == "single" else dict(ix.per_axis(cmd))
     ops = []
     for index, value in items.items():
-        ms = ix.integer(value, 0, 1000)
+        ms = ix.integer(value, "SE")
         axis = ix.board.axes[index]
         ops.append((axis, Op("SE", (ms,), ix.cost(cell, axis))))
         ix.se_entered[index] = ms > 0
@@ -219,7 +229,7 @@ def _se(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("BL", "BH")
 def _bit(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     board = ix.board
-    bit = ix.integer(ix.one(cmd), 0, board.model.io_bits - 1)
+    bit = ix.integer(ix.one(cmd), cmd.mnemonic)
     if not board.directions >> bit & 1:
         # "this is only valid for bits which have been configured as outputs"
         raise CommandFailed(ErrorKind.NOT_AN_OUTPUT)
@@ -250,25 +260,16 @@ _PARAMETER_KIND = {"AC": "acc", "VL": "vel", "VB": "vel"}
 
 @handles("AC", "VL", "VB")
 def _parameter(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    model = ix.board.model
+    """AC, VL, VB: the value in steps (user units applied) against the row ("must be greater
+    than zero (zero is not valid) and less than 8,000,000", "greater than zero and less than or
+    equal to 1,044,000", VB "less than the programmed velocity")."""
     code = cmd.mnemonic
     items = {ix.axis_index: ix.one(cmd)} if ix.mode == "single" else dict(ix.per_axis(cmd))
     ops = []
     for index, raw in items.items():
         axis = ix.board.axes[index]
         assert raw is not None
-        value = ix.convert(axis, raw, _PARAMETER_KIND[code])
-        if code == "AC":
-            # "must be greater than zero (zero is not valid) and less than 8,000,000"
-            if not 0 < value < model.max_acceleration:
-                raise CommandFailed(ErrorKind.OUT_OF_RANGE)
-        elif code == "VL":
-            # "greater than zero and less than or equal to 1,044,000"
-            if not 0 < value <= model.max_velocity:
-                raise CommandFailed(ErrorKind.OUT_OF_RANGE)
-        else:
-            # VB: zero switches the base velocity off (its power-up value)
-            check_range(value, 0, model.max_velocity)
+        value = ix.check(code, ix.convert(axis, raw, _PARAMETER_KIND[code]))
         ops.append((axis, Op(code, (value,), ix.cost(cell, axis))))
     ix.enqueue(ops)
 
@@ -282,20 +283,17 @@ def _lp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         items = {ix.axis_index: raw if raw is not None else Decimal(0)}
     else:
         items = ix.per_axis(cmd)
-    limit = ix.board.model.load_position_limit
     ops = []
     for index, raw_value in items.items():
         axis = ix.board.axes[index]
-        value = ix.convert(axis, raw_value, "dist")
-        check_range(value, -limit, limit)
+        value = ix.check("LP", ix.convert(axis, raw_value, "dist"))
         ops.append((axis, Op("LP", (value,), ix.cost(cell, axis))))
     ix.enqueue(ops)
 
 
-def _check_target(ix: Interpreter, value: float) -> float:
-    limit = ix.board.model.position_limit
-    check_range(value, -limit, limit)
-    return value
+def _check_target(ix: Interpreter, value: float, mnemonic: str, operand: int = 1) -> float:
+    """A position or distance in steps against its row (the position range)."""
+    return ix.check(mnemonic, value, operand)
 
 
 @handles("MA", "MR", "ML", "MT")
@@ -321,7 +319,7 @@ def _move(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw_value in items.items():
         axis = board.axes[index]
-        value = _check_target(ix, ix.convert(axis, raw_value, "dist"))
+        value = _check_target(ix, ix.convert(axis, raw_value, "dist"), code)
         ops.append((axis, Op(code, (value,), ix.cost(cell, axis), group)))
     ix.enqueue(ops)
     if ix.mode != "single":
@@ -333,7 +331,7 @@ def _move(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("RM")
 def _rm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "The parameter must be greater than zero and less than 65,000."
-    n = ix.integer(ix.one(cmd), 1, 64_999)
+    n = ix.integer(ix.one(cmd), "RM")
     ix.enqueue([(ix.axis, Op("RM", (n,), ix.cost(cell, ix.axis)))])
 
 
@@ -380,12 +378,11 @@ def _go(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _jog(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # single-axis on the PC48; the PCIx also takes ``JG#,#,#,#;`` in AA/AM
     items = ix.items(cmd)
-    limit = ix.board.model.jog_limit
     ops = []
     for index, value in items.items():
         axis = ix.board.axes[index]
         v = ix.convert(axis, value, "frac" if cmd.mnemonic == "JF" else "vel")
-        check_range(v, -limit, limit)
+        ix.check(cmd.mnemonic, v)
         ops.append((axis, Op(cmd.mnemonic, (v,), ix.cost(cell, axis))))
     ix.enqueue(ops)
 
@@ -393,14 +390,13 @@ def _jog(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("VS")
 def _vs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     samples, vx, vy = ix.fields(cmd, 3)
-    n = ix.integer(samples, 1, 32_767)
-    limit = ix.board.model.max_velocity
+    n = ix.integer(samples, "VS", 1)
     axis = ix.axis
     vx_f = ix.convert(axis, vx, "vel") if vx is not None else 0.0
     y = ix.board.axis_by_letter("Y")
     vy_f = ix.convert(y, vy, "vel") if (vy is not None and y is not None) else 0.0
-    check_range(vx_f, -limit, limit)
-    check_range(vy_f, -limit, limit)
+    ix.check("VS", vx_f, 2)
+    ix.check("VS", vy_f, 3)
     ix.enqueue([(axis, Op("VS", (n, vx_f, vy_f), ix.cost(cell, axis)))])
 
 
@@ -416,7 +412,7 @@ def _stop(
     for axis in axes:
         # "Flush + 2" (PC48); the PCIx's tables give their own numbers (+PA, +settle)
         slots = ix.cost(cell, axis) if cell is not None and cell.kind is Kind.FLUSH else 2
-        axis.queue.append(Op("STOP", (kill,), slots))
+        axis.queue.append(Op("STOP", (kill,), slots, source=board.input_source))
     ix.mt_blocked = False
 
 
@@ -462,8 +458,7 @@ def _loop_axes(ix: Interpreter) -> list[Axis]:
 
 @handles("LS")
 def _ls(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # Summary: "from 1 to 32000 loops"
-    n = ix.integer(ix.one(cmd), 1, 32_000)
+    n = ix.integer(ix.one(cmd), "LS")
     if ix.contour is not None:
         # the VS4 table accepts LS in a contour definition (2 slots) although LE is not valid
         # there and "The CX command cannot be placed within a loop": it takes its slots and
@@ -481,7 +476,7 @@ def _ls(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("WS")
 def _ws(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    bit = ix.integer(ix.one(cmd), 0, ix.board.model.io_bits - 1)
+    bit = ix.integer(ix.one(cmd), "WS")
     axes = _loop_axes(ix)
     ix.open_loop("WS", axes)
     ix.enqueue([(a, Op("WS", (bit,), ix.cost(cell, a))) for a in axes])
@@ -555,7 +550,7 @@ def _home(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
     raw = ix.one(cmd, required=False)
     value = ix.convert(axis, raw, "dist") if raw is not None else 0.0
-    _check_target(ix, value)
+    _check_target(ix, value, cmd.mnemonic)
     direction = 1 if cmd.mnemonic == "HM" else -1
     ix.enqueue([(axis, Op("HM", (value, False, direction), ix.cost(cell, axis)))])
 
@@ -612,8 +607,7 @@ def _in(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw in items.items():
         axis = board.axes[index]
-        value = ix.convert(axis, raw, "dist")
-        check_range(value, 0, board.model.position_limit)
+        value = ix.check("IN", ix.convert(axis, raw, "dist"))
         ops.append((axis, Op("IN", (value,), ix.cost(cell, axis), group)))
     ix.enqueue(ops)
 
@@ -671,7 +665,7 @@ def _wq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("SW")
 def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     board = ix.board
-    bit = ix.integer(ix.one(cmd), 0, board.model.io_bits - 1)
+    bit = ix.integer(ix.one(cmd), "SW")
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("SW", (bit,), ix.cost(cell, ix.axis)))])
         return
@@ -681,9 +675,9 @@ def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("WT")
 def _wt(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "The parameter must be between 1 and 32,000." "In the AA mode, all axes will wait."
+    # "In the AA mode, all axes will wait."
     board = ix.board
-    ms = ix.integer(ix.one(cmd), 1, 32_000)
+    ms = ix.integer(ix.one(cmd), "WT")
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("WT", (ms,), ix.cost(cell, ix.axis)))])
         return
@@ -798,8 +792,7 @@ def _uu(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     else:
         items = ix.per_axis(cmd)
     for value in items.values():
-        if not 0 < value <= 1_000_000_000:
-            raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+        ix.check("UU", value)
     for index, value in items.items():
         ix.board.axes[index].uu = None if value == 1 else value
 
@@ -819,8 +812,8 @@ def _er(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     enc, motor = ix.required(cmd, 2)
     if axis.uu is None and (enc != enc.to_integral_value() or motor != motor.to_integral_value()):
         raise CommandFailed(ErrorKind.BAD_NUMBER)
-    if enc <= 0 or motor <= 0:
-        raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+    ix.check("ER", enc, 1)
+    ix.check("ER", motor, 2)
     ix.enqueue([(axis, Op("ER", (float(enc), float(motor)), ix.cost(cell, axis)))])
 
 
@@ -831,13 +824,9 @@ def _hold_parameter(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None
     assert raw is not None
     code = cmd.mnemonic
     if code == "HV":
-        value = ix.convert(axis, raw, "vel")
-        if not 0 < value <= ix.board.model.max_velocity:
-            raise CommandFailed(ErrorKind.OUT_OF_RANGE)
-    elif code == "HG":
-        value = float(ix.integer(raw, 1, 32_000))  # "between 1 and 32,000"
-    else:
-        value = float(ix.integer(raw, 0, ix.board.model.position_limit))
+        value = ix.check(code, ix.convert(axis, raw, "vel"))
+    else:  # HG, HD, ES: whole numbers
+        value = float(ix.integer(raw, code))
     ix.enqueue([(axis, Op(code, (value,), ix.cost(cell, axis)))])
 
 
@@ -893,10 +882,8 @@ def _direction(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _mv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
     pos, vel = ix.required(cmd, 2)
-    p = _check_target(ix, ix.convert(axis, pos, "dist"))
-    v = ix.convert(axis, vel, "vel")
-    if not 0 < abs(v) <= ix.board.model.max_velocity:
-        raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+    p = _check_target(ix, ix.convert(axis, pos, "dist"), "MV", 1)
+    v = ix.check("MV", ix.convert(axis, vel, "vel"), 2)
     ix.enqueue([(axis, Op("MV", (p, v), ix.cost(cell, axis)))])
 
 
@@ -905,11 +892,11 @@ def _sp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
     raw = ix.one(cmd)
     assert raw is not None
-    p = _check_target(ix, ix.convert(axis, raw, "dist"))
+    p = _check_target(ix, ix.convert(axis, raw, "dist"), cmd.mnemonic)
     if cmd.mnemonic == "FP":
         # "flush the command queue and attempt to stop at the specified position"
         ix.board.executor.flush(axis, t)
-        axis.queue.append(Op("FP", (p,), ix.cost(cell, axis)))
+        axis.queue.append(Op("FP", (p,), ix.cost(cell, axis), source=ix.board.input_source))
         return
     ix.enqueue([(axis, Op("SP", (p,), ix.cost(cell, axis)))])
 
@@ -922,9 +909,7 @@ def _cv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "Changing this parameter will make any previously defined contours invalid."
     raw = ix.one(cmd)
     assert raw is not None
-    v = float(raw)
-    if not 0 < v <= ix.board.model.max_velocity:
-        raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+    v = ix.check("CV", float(raw))
     ix.board.contour_velocity = v
     if ix.board.contour is not None:
         ix.board.contour.valid = False
@@ -939,7 +924,8 @@ def _cd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if not start:
         raise CommandFailed(ErrorKind.MISSING_PARAMETER)
     axes = tuple(sorted(start))
-    positions = tuple(ix.convert(board.axes[i], start[i], "dist") for i in axes)
+    # the start "in absolute units": each held to the position range (its row)
+    positions = tuple(ix.check("CD", ix.convert(board.axes[i], start[i], "dist")) for i in axes)
     ix.contour = ContourDefinition(
         axes=axes,
         start=positions,
@@ -955,7 +941,8 @@ def _contour_line(ix: Interpreter, cmd: Command, cell: Cell) -> None:
     assert defn is not None
     fields = ix.per_axis(cmd, list(defn.axes))
     target = tuple(
-        ix.convert(ix.board.axes[a], fields[a], "dist") if a in fields else None for a in defn.axes
+        ix.check("MT", ix.convert(ix.board.axes[a], fields[a], "dist")) if a in fields else None
+        for a in defn.axes
     )
     slots = ix.cost(cell, ix.axis, contour_axes=len(defn.axes))
     if not defn.add(Line(target), slots):
@@ -972,8 +959,11 @@ def _cr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         raise CommandFailed(ErrorKind.CIRCULAR_AXES)
     xc, yc, angle = ix.required(cmd, 3)
     ax, ay = (ix.board.axes[i] for i in defn.axes)
-    center = (ix.convert(ax, xc, "dist"), ix.convert(ay, yc, "dist"))
-    if not defn.add(Arc(center, float(angle)), ix.cost(cell, ix.axis)):
+    center = (
+        ix.check("CR", ix.convert(ax, xc, "dist"), 1),
+        ix.check("CR", ix.convert(ay, yc, "dist"), 2),
+    )
+    if not defn.add(Arc(center, float(ix.check("CR", angle, 3))), ix.cost(cell, ix.axis)):
         raise CommandFailed(ErrorKind.CONTOUR_FULL)
 
 

@@ -14,6 +14,9 @@ from functools import cache
 from typing import TYPE_CHECKING
 
 from omsd.models.spec import CommandSpec, Model
+from omsd.protocol.ranges import RangeTable
+from omsd.protocol.ranges_pc48 import PC48_RANGES
+from omsd.protocol.ranges_pcix import PCIX_RANGES
 
 if TYPE_CHECKING:
     from omsd.board.commands import Handler
@@ -48,6 +51,12 @@ def commands(model: Model) -> Mapping[str, CommandSpec]:
 
         return {**model.commands, **MAX_COMMANDS}
     return model.commands
+
+
+def ranges(model: Model) -> RangeTable:
+    """The operand ranges of the model's language (:mod:`omsd.protocol.ranges`): the PC48
+    family's table (rows per family for the PC46 and VS4) or the PCIx's."""
+    return PCIX_RANGES if model.dialect == "pcix" else PC48_RANGES
 
 
 def prefixes(table: Mapping[str, CommandSpec]) -> frozenset[str]:

@@ -72,12 +72,25 @@ class Executor:
     # -- the queue ----------------------------------------------------------------------------
 
     def step(self, axis: Axis, t: float) -> bool:
-        """Run the axis's queue as far as it goes at ``t``; True if anything happened."""
+        """Run the axis's queue as far as it goes at ``t``; True if anything happened. What an
+        op causes belongs to the session that sent it (``Op.source``)."""
+        board = self.board
+        saved = board.talker
+        try:
+            return self._step(axis, t)
+        finally:
+            board.talker = saved
+
+    def _step(self, axis: Axis, t: float) -> bool:
         q = axis.queue
+        board = self.board
         progressed = False
         for _ in range(MAX_STEPS):
             if axis.wait is not None:
                 w = axis.wait
+                held = q.current
+                if held is not None:
+                    board.talker = axis.source = held.source
                 if not self._satisfied(axis, w, t):
                     return progressed
                 axis.wait = None
@@ -106,6 +119,7 @@ class Executor:
             op = q.current
             if op is None:
                 return progressed
+            board.talker = axis.source = op.source
             result = self._ops[op.code](axis, op, t)
             progressed = True
             if isinstance(result, Wait):
@@ -164,11 +178,19 @@ class Executor:
         return None
 
     def drop_from_groups(self, axis: Axis, ops: list[Op], t: float) -> None:
-        """A flushed axis no longer takes part in the groups of its dropped ops."""
-        groups = {id(op.group): op.group for op in ops if op.group is not None}
-        for g in groups.values():
+        """A flushed axis no longer takes part in the groups of its dropped ops. A group that
+        completes for it (an AA ID the others had reached) speaks for the session that sent
+        it, not for whoever caused the flush."""
+        board = self.board
+        saved = board.talker
+        groups = {id(op.group): op for op in ops if op.group is not None}
+        for op in groups.values():
+            g = op.group
+            assert g is not None
             g.members.discard(axis.index)
+            board.talker = op.source
             self.check_group(g, t)
+        board.talker = saved
 
     def flush(self, axis: Axis, t: float) -> None:
         dropped = axis.queue.flush()

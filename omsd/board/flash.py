@@ -14,12 +14,15 @@ The saved set is a JSON object (``omsd.statefile.BoardFlash.defaults``)::
     {"axes": {"X": {"VL": 200000.0, "AC": ..., "servo": {"kp": 10.0, ...}, ...}, ...},
      "tables": {"2": [[0.1, 0.2], ...]}, "scurves": {"1": [...]}}
 
-Values that do not fit (a hand-edited file) are skipped one by one: the factory value stays.
+Values that do not fit (a hand-edited file: the wrong type, out of range) are skipped one by
+one: the factory value stays, and :func:`apply` returns where each was (``axes.X.VL: expected a
+number >= 0, got a string``) for the daemon to report in one warning line. Keys it does not know
+are left alone.
 """
 
 from __future__ import annotations
 
-import contextlib
+import math
 from dataclasses import asdict, fields, replace
 from decimal import Decimal, InvalidOperation
 from typing import TYPE_CHECKING, Any
@@ -81,18 +84,48 @@ def _number(value: Any) -> float | None:
     return float(value)
 
 
-def _apply_axis(axis: Axis, p: dict[str, Any], board: Board) -> None:
-    for key, attr in (("AC", "ac"), ("VL", "vl"), ("VB", "vb"), ("ES", "es"), ("HD", "hd")):
+def _kind(value: object) -> str:
+    """A JSON value's type, for a problem's text."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, int | float):
+        return repr(value)
+    if isinstance(value, str):
+        return repr(value) if len(value) <= 20 else "a string"
+    return "an array" if isinstance(value, list) else "an object"
+
+
+def _apply_axis(axis: Axis, p: dict[str, Any], board: Board, at: str, problems: list[str]) -> None:
+    def bad(key: str, expected: str) -> None:
+        problems.append(f"{at}.{key}: expected {expected}, got {_kind(p[key])}")
+
+    # HV 0 is the factory "no hold velocity" (executor: no hold correction without one)
+    for key, attr in (
+        ("AC", "ac"),
+        ("VL", "vl"),
+        ("VB", "vb"),
+        ("ES", "es"),
+        ("HD", "hd"),
+        ("HV", "hv"),
+    ):
         v = _number(p.get(key))
         if v is not None and v >= 0:
             setattr(axis, attr, v)
-    for key, attr in (("HG", "hg"), ("HV", "hv"), ("ER", "ratio")):
+        elif key in p:
+            bad(key, "a number >= 0")
+    for key, attr in (("HG", "hg"), ("ER", "ratio")):
         v = _number(p.get(key))
         if v is not None and v > 0:
             setattr(axis, attr, v)
+        elif key in p:
+            bad(key, "a number > 0")
     bc = p.get("BC")
     if isinstance(bc, int) and not isinstance(bc, bool) and -50 <= bc <= 50:
         axis.backlash = bc
+    elif "BC" in p:
+        bad("BC", "an integer -50..50")
     for key, attr in (
         ("home_high", "home_high"),
         ("limit_high", "limit_high"),
@@ -103,27 +136,50 @@ def _apply_axis(axis: Axis, p: dict[str, Any], board: Board) -> None:
     ):
         if isinstance(p.get(key), bool):
             setattr(axis, attr, p[key])
+        elif key in p:
+            bad(key, "true or false")
     if p.get("PA") is None or isinstance(p.get("PA"), bool):
         axis.pa = p.get("PA")
+    else:
+        bad("PA", "true, false or null")
     se = p.get("SE")
     if isinstance(se, int) and not isinstance(se, bool) and 0 <= se <= 1000:
         axis.se_ms = se
+    elif "SE" in p:
+        bad("SE", "an integer 0..1000")
     uu = p.get("UU")
     if uu is None:
         axis.uu = None
     elif isinstance(uu, str):
-        with contextlib.suppress(InvalidOperation):
+        try:
             axis.uu = Decimal(uu)
+        except InvalidOperation:
+            bad("UU", "a decimal number in a string or null")
+    else:
+        bad("UU", "a decimal number in a string or null")
     ramp = p.get("ramp")
-    if isinstance(ramp, dict):
-        shape = ramp_from(ramp, board)
-        if shape is not None:
-            axis.ramp = shape
+    shape = ramp_from(ramp, board) if isinstance(ramp, dict) else None
+    if shape is not None:
+        axis.ramp = shape
+    elif "ramp" in p:
+        bad("ramp", "a ramp {kind, steps, table} this board can run")
     gains = p.get("servo")
     if axis.servo is not None and isinstance(gains, dict):
-        known = {k: v for k, v in gains.items() if k in _GAIN_NAMES}
-        with contextlib.suppress(TypeError):
-            axis.servo.set_gains(replace(ServoGains(), **known))
+        known: dict[str, Any] = {}
+        for name, value in gains.items():
+            if name not in _GAIN_NAMES:
+                continue
+            flag = name in ("bipolar", "inverted")
+            if flag and isinstance(value, bool):
+                known[name] = value
+            elif not flag and _number(value) is not None and math.isfinite(value):
+                known[name] = float(value)
+            else:
+                what = "true or false" if flag else "a number"
+                problems.append(f"{at}.servo.{name}: expected {what}, got {_kind(value)}")
+        axis.servo.set_gains(replace(ServoGains(), **known))
+    elif axis.servo is not None and "servo" in p:
+        bad("servo", "an object of gains")
 
 
 def ramp_from(ramp: dict[str, Any], board: Board) -> pf.RampShape | None:
@@ -158,8 +214,11 @@ def scurve_ramp(board: Board, profile: int) -> pf.RampShape | None:
     return pf.RampShape(pf.RampKind.SCURVE, table=profile, scurve=curve)
 
 
-def apply(board: Board, saved: dict[str, Any]) -> None:
-    """Load a saved parameter set (RD, power-up) over the factory values already in place."""
+def apply(board: Board, saved: dict[str, Any]) -> list[str]:
+    """Load a saved parameter set (RD, power-up) over the factory values already in place.
+    Returns the values skipped because they do not fit, each as ``where: expected ..., got
+    ...`` (empty when everything was used)."""
+    problems: list[str] = []
     tables = saved.get("tables")
     if isinstance(tables, dict):
         for key, points in tables.items():
@@ -167,22 +226,31 @@ def apply(board: Board, saved: dict[str, Any]) -> None:
                 n = int(key)
                 board.ramp_tables[n] = [(float(a), float(v)) for a, v in points]
             except (TypeError, ValueError):
-                continue
+                problems.append(f"tables.{key}: expected [[a, v], ...], got {_kind(points)}")
+    elif "tables" in saved:
+        problems.append(f"tables: expected an object, got {_kind(tables)}")
     scurves = saved.get("scurves")
     if isinstance(scurves, dict):
         for key, values in scurves.items():
             try:
                 board.scurves[int(key)] = pf.SCurve(*(float(v) for v in values))
             except (TypeError, ValueError):
-                continue
+                problems.append(f"scurves.{key}: expected an S-curve, got {_kind(values)}")
+    elif "scurves" in saved:
+        problems.append(f"scurves: expected an object, got {_kind(scurves)}")
     axes = saved.get("axes")
     if isinstance(axes, dict):
         for axis in board.axes:
             p = axes.get(axis.letter)
             if isinstance(p, dict):
-                _apply_axis(axis, p, board)
+                _apply_axis(axis, p, board, f"axes.{axis.letter}", problems)
+            elif axis.letter in axes:
+                problems.append(f"axes.{axis.letter}: expected an object, got {_kind(p)}")
+    elif "axes" in saved:
+        problems.append(f"axes: expected an object, got {_kind(axes)}")
     for axis in board.axes:
         axis.aux = axis.aux_default_high
+    return problems
 
 
 def factory(board: Board) -> None:

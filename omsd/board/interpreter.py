@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 from decimal import Decimal
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from omsd.board import dialect
 from omsd.board.contour import ContourDefinition
@@ -25,7 +25,8 @@ from omsd.board.events import ErrorKind
 from omsd.board.macros import MacroCapture, MacroStore
 from omsd.models.spec import Cell, CommandSpec, Kind
 from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
-from omsd.protocol.operands import OperandError, check_range, parse_number, truncate
+from omsd.protocol.operands import OperandError, parse_number, truncate
+from omsd.protocol.ranges import OperandRange
 
 if TYPE_CHECKING:
     from omsd.board.axis import Axis
@@ -33,6 +34,7 @@ if TYPE_CHECKING:
     from omsd.board.queue import Op
 
 MAX_LOOP_DEPTH = 4
+N = TypeVar("N", Decimal, float, int)
 
 # Commands that only report or select an axis: they queue nothing, so the axes need not be run
 # after them (the interpreter's hot path: a client polling QA/RP).
@@ -121,6 +123,7 @@ class Interpreter:
         self.capacity = board.model.input_buffer
         self.commands = dialect.commands(board.model)
         self.handlers = dialect.handlers(board.model)
+        self.ranges = dialect.ranges(board.model)
         self._syntax = _SyntaxTable({m: _syntax(spec) for m, spec in self.commands.items()})
         self.lexer = self._lexer()
         self._bare = self.lexer.bare_pairs(list(self.commands))
@@ -171,6 +174,15 @@ class Interpreter:
         self.wq = None
         self.capture = None
 
+    def end_of_session(self) -> None:
+        """Another session starts writing: what the last one left half-entered and would
+        swallow the newcomer's commands is abandoned, a PCIx macro definition without its
+        Control-Z (the macro keeps its old text) and a custom ramp table without its DAE (only
+        DAB and DAE would be valid until then)."""
+        self.capture = None
+        self.table = None
+        self.table_points = []
+
     def control_d(self, t: float) -> None:
         """Control-D: "the same functions as the KL command. It bypasses the command
         interpreter" (PC48 §6.9). Whatever the interpreter was stuck on is dropped."""
@@ -190,6 +202,7 @@ class Interpreter:
 
     def pump(self, t: float) -> bool:
         board = self.board
+        board.talker = board.input_source  # what the interpreter says answers the input's sender
         progressed = False
         while True:
             if board.init_until is not None and t < board.init_until:
@@ -404,12 +417,26 @@ class Interpreter:
             return float(truncate(scaled))
         return float(scaled)
 
-    def integer(self, value: Decimal | None, low: float, high: float) -> int:
+    def operand_range(self, mnemonic: str, operand: int = 1, variant: str = "") -> OperandRange:
+        """The row of the dialect's range table (:mod:`omsd.protocol.ranges`) for this model
+        family: the one place a command's operand range is stated."""
+        return self.ranges.lookup(mnemonic, operand, self.board.model.family, variant)
+
+    def check(self, mnemonic: str, value: N, operand: int = 1, variant: str = "") -> N:
+        """``value`` if its range row holds it, else a command error (``OUT_OF_RANGE``)."""
+        row = self.operand_range(mnemonic, operand, variant)
+        if not row.contains(value, len(self.board.axes)):
+            raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+        return value
+
+    def integer(
+        self, value: Decimal | None, mnemonic: str, operand: int = 1, variant: str = ""
+    ) -> int:
+        """A whole-number operand: truncated toward zero (``MR100.9`` is 100), then checked
+        against its range row."""
         if value is None:
             raise CommandFailed(ErrorKind.MISSING_PARAMETER)
-        n = truncate(value)
-        check_range(n, low, high)
-        return n
+        return self.check(mnemonic, truncate(value), operand, variant)
 
     # -- queueing -------------------------------------------------------------------------------
 
@@ -439,7 +466,9 @@ class Interpreter:
             # than it has slots, so a flood of them holds the host off like any other
             if q.free < slots or len(q.program) + count[index] > q.capacity:
                 raise Blocked
+        source = self.board.input_source
         for axis, op in items:
+            op.source = source
             axis.queue.append(op)
 
     # -- loops ----------------------------------------------------------------------------------

@@ -95,7 +95,6 @@ from omsd.board.interpreter import Interpreter
 from omsd.board.queue import Op
 from omsd.models.spec import Cell
 from omsd.protocol.lexer import Command
-from omsd.protocol.operands import check_range
 
 MAX_HANDLERS: dict[str, Handler] = {}
 
@@ -186,9 +185,7 @@ def _load_encoder(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     value = ix.one(cmd)
     assert value is not None
     axis = ix.axis
-    limit = ix.board.model.load_position_limit
-    n = ix.convert(axis, value, "dist")
-    check_range(n, -limit, limit)
+    n = ix.check("LPE", ix.convert(axis, value, "dist"))
     ix.enqueue([(axis, Op("LP", (n,), ix.cost(cell, axis)))])
 
 

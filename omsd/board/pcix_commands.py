@@ -31,15 +31,15 @@ from decimal import Decimal
 from omsd.board import flash
 from omsd.board import profiles as pf
 from omsd.board.axis import Axis
-from omsd.board.commands import Handler, registrar
+from omsd.board.commands import Handler, parabolic_steps, registrar
 from omsd.board.events import ErrorKind
 from omsd.board.interpreter import CommandFailed, Interpreter
-from omsd.board.macros import PERMANENT, TEMPORARY, MacroCapture
+from omsd.board.macros import MacroCapture
 from omsd.board.queue import Op, SyncGroup
 from omsd.board.servo import ServoGains
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.lexer import Command
-from omsd.protocol.operands import check_range, parse_number, truncate
+from omsd.protocol.operands import parse_number
 
 PCIX_HANDLERS: dict[str, Handler] = {}
 
@@ -90,11 +90,16 @@ def _flag(apply: Callable[[Axis, float], None]) -> Handler:
     return handler
 
 
-def _one_value(ix: Interpreter, cmd: Command, low: float, high: float) -> Decimal:
+def _one_value(ix: Interpreter, cmd: Command) -> Decimal:
+    """The command's one decimal operand, checked against its range row."""
     value = ix.one(cmd)
     assert value is not None
-    check_range(value, low, high)
-    return value
+    return ix.check(cmd.mnemonic, value)
+
+
+def _one_integer(ix: Interpreter, cmd: Command) -> int:
+    """The command's one whole-number operand (truncated), checked against its range row."""
+    return ix.integer(ix.one(cmd), cmd.mnemonic)
 
 
 def _reply(ix: Interpreter, text: str, t: float) -> None:
@@ -154,24 +159,21 @@ def _q_ad(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 # -- macros ---------------------------------------------------------------------------------------
 
 
-def _macro_number(ix: Interpreter, cmd: Command, slots: range) -> int:
-    value = ix.one(cmd)
-    assert value is not None
-    n = truncate(value)
-    check_range(n, slots.start, slots.stop - 1)
-    return n
+def _macro_number(ix: Interpreter, cmd: Command) -> int:
+    """MD "0 ≤ MD ≤ 4", MX "0 ≤ MX ≤ 24", PM "0 ≤ PM ≤ 24" (their range rows)."""
+    return _one_integer(ix, cmd)
 
 
 @handles("MD")
 def _md(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "MD# ... the number must be from 0 to 4": what follows, up to Control-Z or ``^Z``, is
     the macro."""
-    ix.capture = MacroCapture(_macro_number(ix, cmd, TEMPORARY))
+    ix.capture = MacroCapture(_macro_number(ix, cmd))
 
 
 @handles("MX")
 def _mx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    text = ix.macros.get(_macro_number(ix, cmd, range(0, 25)))
+    text = ix.macros.get(_macro_number(ix, cmd))
     if text is None:
         raise CommandFailed(ErrorKind.NO_MACRO)
     ix.run_macro(text)
@@ -180,7 +182,7 @@ def _mx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("PM")
 def _pm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "returns the contents of the specified macro"; nothing when it is empty."""
-    text = ix.macros.get(_macro_number(ix, cmd, range(0, 25)))
+    text = ix.macros.get(_macro_number(ix, cmd))
     if text is not None:
         _reply(ix, text.decode("latin-1"), t)
 
@@ -189,9 +191,7 @@ def _pm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _pt(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "PT#,#; copies temporary macro # (0-4) to permanent macro # (5-24)"."""
     src, dst = ix.required(cmd, 2)
-    n, m = truncate(src), truncate(dst)
-    check_range(n, TEMPORARY.start, TEMPORARY.stop - 1)
-    check_range(m, PERMANENT.start, PERMANENT.stop - 1)
+    n, m = ix.integer(src, "PT", 1), ix.integer(dst, "PT", 2)
     text = ix.macros.get(n)
     if text is None:
         raise CommandFailed(ErrorKind.NO_MACRO)
@@ -217,13 +217,6 @@ def parabolic(steps: int) -> pf.RampShape:
     return pf.RampShape(pf.RampKind.PARABOLIC, steps, floor=0.1)
 
 
-def _steps(value: Decimal | None) -> int:
-    # "A parameter out of this range or no parameter supplied defaults to 70% or 3 steps."
-    if value is not None and 3 <= value <= 10:
-        return int(value)
-    return 3
-
-
 @handles("PF")
 def _pf(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "All axes will use linear acceleration"."""
@@ -239,7 +232,7 @@ def _cn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("PN")
 def _pn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    shape = parabolic(_steps(ix.one(cmd, required=False)))
+    shape = parabolic(parabolic_steps(ix, ix.one(cmd, required=False), "PN"))
     _apply(ix, cmd, cell, list(ix.board.axes), _ramp_setter(lambda a: shape), t)
 
 
@@ -263,7 +256,8 @@ def _pr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         items = dict(ix.per_axis(cmd))
     ops = []
     for index, value in items.items():
-        shape = parabolic(_steps(value))
+        # "similar to the PN command": out of range or left out, 3 steps
+        shape = parabolic(parabolic_steps(ix, value, "PR"))
         axis = ix.board.axes[index]
         apply = _ramp_setter(lambda a, s=shape: s)  # type: ignore[misc]
         ops.append((axis, Op("SET", ("PR", apply), ix.cost(cell, axis))))
@@ -274,7 +268,7 @@ def _pr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _sr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "SR# selects custom ramp table # for the current axis" (1..4); a table never defined
     is an error rather than the manual's "unpredictable"."""
-    n = truncate(_one_value(ix, cmd, 1, 4))
+    n = _one_integer(ix, cmd)
     shape = flash.custom_ramp(ix.board, n)
     if shape is None:
         raise CommandFailed(ErrorKind.NO_TABLE)
@@ -287,7 +281,7 @@ def _sr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("SS")
 def _ss(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "SS# selects the S-curve profile #" defined by AJ."""
-    n = truncate(_one_value(ix, cmd, 1, 4))
+    n = _one_integer(ix, cmd)
     shape = flash.scurve_ramp(ix.board, n)
     if shape is None:
         raise CommandFailed(ErrorKind.NO_TABLE)
@@ -321,8 +315,7 @@ def _dar(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "DAR# begins the definition of custom ramp table #" (1..4); "until the DAE command is
     entered, only the DAB and DAE commands will be valid" (others set the command-error flag
     and are ignored)."""
-    n = truncate(_one_value(ix, cmd, 1, 4))
-    ix.table = n
+    ix.table = _one_integer(ix, cmd)
     ix.table_points = []
 
 
@@ -331,8 +324,8 @@ def _dab(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.table is None:
         raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
     accel, velocity = ix.required(cmd, 2)
-    check_range(accel, 0, 1)
-    check_range(velocity, 0, 1)
+    ix.check("DAB", accel, 1)
+    ix.check("DAB", velocity, 2)
     if len(ix.table_points) >= MAX_BREAKPOINTS:
         raise CommandFailed(ErrorKind.TABLE_FULL)
     ix.table_points.append((float(accel), float(velocity)))
@@ -351,7 +344,7 @@ def _dae(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 
 def _table_number(ix: Interpreter, cmd: Command) -> int:
-    return truncate(_one_value(ix, cmd, 1, 4))
+    return _one_integer(ix, cmd)
 
 
 def _dab_line(point: tuple[float, float]) -> str:
@@ -370,9 +363,7 @@ def _q_da(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("?DE")
 def _q_de(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     table, entry = ix.required(cmd, 2)
-    n, k = truncate(table), truncate(entry)
-    check_range(n, 1, 4)
-    check_range(k, 1, MAX_BREAKPOINTS)
+    n, k = ix.integer(table, "?DE", 1), ix.integer(entry, "?DE", 2)
     points = ix.board.ramp_tables.get(n, [])
     _reply(ix, _dab_line(points[k - 1]) if k <= len(points) else "", t)
 
@@ -392,15 +383,11 @@ def _aj(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     values = ix.fields(cmd, 7)
     if values[0] is None:
         raise CommandFailed(ErrorKind.MISSING_PARAMETER)
-    n = truncate(values[0])
-    check_range(n, 1, len(ix.board.axes))
+    n = ix.integer(values[0], "AJ", 1)
+    for operand, v in enumerate(values[1:], start=2):
+        if v is not None:
+            ix.check("AJ", v, operand)
     lo, peak, radius, dlo, dpeak, dradius = values[1:]
-    for v in (lo, peak, dlo, dpeak):
-        if v is not None:
-            check_range(v, 0, 1)
-    for v in (radius, dradius):
-        if v is not None:
-            check_range(v, 1, 10)
     alower = float(lo) if lo is not None else 0.0
     apeak = float(peak) if peak is not None else alower
     aradius = float(radius) if radius is not None else 1.0
@@ -412,7 +399,7 @@ def _aj(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("?AJ")
 def _q_aj(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    n = truncate(_one_value(ix, cmd, 1, 4))
+    n = _one_integer(ix, cmd)
     curve = ix.board.scurves.get(n, pf.SCurve())
     values = (curve.alower, curve.apeak, curve.aradius, curve.dlower, curve.dpeak, curve.dradius)
     _reply(ix, ",".join([f"{n:.7f}", *(f"{v:.8f}" for v in values)]), t)
@@ -420,18 +407,19 @@ def _q_aj(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 # -- servo: gains, DAC mode, loop -----------------------------------------------------------------
 
-# mnemonic -> (ServoGains field, low, high, places in the query reply; None = integer)
-_GAINS: dict[str, tuple[str, float, float, int | None]] = {
-    "KP": ("kp", 0, 32_767, 2),
-    "KI": ("ki", 0, 32_767, 2),
-    "KD": ("kd", 0, 32_767, 2),
-    "KV": ("kv", 0, 32_767, 2),
-    "KA": ("ka", 0, 32_767, 2),
-    "KB": ("kb", 0, 10, 2),
-    "KF": ("kf", 0, 32_767, None),
-    "KU": ("ku", 0, 32_767, None),
-    "KO": ("ko", -32_767, 32_767, None),
-    "DZ": ("dz", -32_667, 32_667, None),
+# mnemonic -> (ServoGains field, places in the query reply; None = integer); the ranges are the
+# rows of omsd.protocol.ranges_pcix ("RANGE: 0.00 ≤ KP ≤ 32767.00" ...)
+_GAINS: dict[str, tuple[str, int | None]] = {
+    "KP": ("kp", 2),
+    "KI": ("ki", 2),
+    "KD": ("kd", 2),
+    "KV": ("kv", 2),
+    "KA": ("ka", 2),
+    "KB": ("kb", 2),
+    "KF": ("kf", None),
+    "KU": ("ku", None),
+    "KO": ("ko", None),
+    "DZ": ("dz", None),
 }
 
 
@@ -447,15 +435,14 @@ def _set_gains(**changes: float | bool) -> Callable[[Axis, float], None]:
 
 
 def _gain(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    name, low, high, places = _GAINS[cmd.mnemonic]
-    value = _one_value(ix, cmd, low, high)
-    number = float(value) if places is not None else float(truncate(value))
+    name, places = _GAINS[cmd.mnemonic]
+    number = float(_one_value(ix, cmd)) if places is not None else float(_one_integer(ix, cmd))
     _apply(ix, cmd, cell, [ix.axis], _set_gains(**{name: number}), t)
 
 
 def _gain_query(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     mnemonic = cmd.mnemonic[1:]
-    name, _, _, places = _GAINS[mnemonic]
+    name, places = _GAINS[mnemonic]
     servo = ix.axis.servo
     value = float(getattr(servo.gains if servo is not None else ServoGains(), name))
     text = _fixed(value, places) if places is not None else str(math.trunc(value))
@@ -568,18 +555,10 @@ def _tn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _dc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "1 ≤ DC ≤ 8000000": the deceleration GU uses."""
     axis = ix.axis
-    value = ix.convert(axis, _one_value(ix, cmd, 1, 8_000_000), "acc")
+    raw = ix.one(cmd)
+    assert raw is not None
+    value = ix.check("DC", ix.convert(axis, raw, "acc"))
     _apply(ix, cmd, cell, [axis], _setter("dc", axis.to_motor(value)), t)
-
-
-@handles("BC")
-def _bc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """Backlash: "0 ≤ BACKLASH ≤ +50 STEPPERS", "-50 ≤ BACKLASH ≤ +50 SERVOS"."""
-    axis = ix.axis
-    value = ix.one(cmd, required=False)
-    n = 0 if value is None else truncate(value)
-    check_range(n, -50 if axis.is_servo else 0, 50)
-    _apply(ix, cmd, cell, [axis], _setter("backlash", n), t)
 
 
 # the queries of one value: mnemonic -> reply text for the current axis
@@ -767,7 +746,7 @@ def _an(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """Wait for general-purpose input # to go high (SW) or low (BW); in AA every axis waits."""
     board = ix.board
-    bit = ix.integer(ix.one(cmd), 0, board.model.io_bits - 1)
+    bit = ix.integer(ix.one(cmd), cmd.mnemonic)
     args = (bit, cmd.mnemonic == "SW")
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("SW", args, ix.cost(cell, ix.axis)))])
@@ -808,8 +787,12 @@ def _rb(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("BS")
 def _bs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """ "BS# sets all outputs at once", hex "00 ≤ Hex number ≤ FF", 1 = high; "Data written to
-    input bits has no effect"."""
+    """ "Set all of the output bits to a known state at the same time ... The mask must be in
+    ASCII hex format where the least significant bit (bit 0) is on the right. To set a line
+    low, the corresponding bit in the hex mask must be a 0. A one (1) in any bit position will
+    set the corresponding bit high." "Range: 00 ≤ Hex number ≤ FF" (its row); "Data written to
+    input bits has no effect". The lexer reads the operand as hexadecimal digits (``BSA5;``,
+    ``BSff;``: the table row's ``hex_operand``)."""
     fields = cmd.fields or ()
     if len(fields) != 1 or fields[0] is None:
         raise CommandFailed(ErrorKind.MISSING_PARAMETER)
@@ -817,7 +800,7 @@ def _bs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         mask = int(fields[0], 16)
     except ValueError:
         raise CommandFailed(ErrorKind.BAD_NUMBER) from None
-    check_range(mask, 0, 0xFF)
+    ix.check("BS", mask)
     axis = ix.axis
 
     def apply(a: Axis, when: float) -> None:

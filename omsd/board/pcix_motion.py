@@ -151,7 +151,7 @@ from omsd.board.registers import DON_S, ENC_S
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.errors import ErrorKind
 from omsd.protocol.lexer import Command
-from omsd.protocol.operands import check_range, parse_number, truncate
+from omsd.protocol.operands import parse_number, truncate
 
 if TYPE_CHECKING:
     from omsd.board.board import Board
@@ -159,16 +159,6 @@ if TYPE_CHECKING:
 
 Result = Wait | int | None
 OpFunction = Callable[["Executor", Axis, Op, float], Result]
-
-#: EG: "(Gear Ratio *X the Master Axis' VL value) is at least 1 and less than the maximum
-#: controller step rate of 1,048,574 steps per second".
-GEAR_RATE_LIMIT = 1_048_574
-#: BC: "0 ≤ BACKLASH ≤ +50 STEPPERS", "-50 ≤ BACKLASH ≤ +50 SERVOS".
-BACKLASH_LIMIT = 50
-#: TM: "0 ≤ TM ≤ 200,000" (milliseconds).
-TM_LIMIT = 200_000
-#: NV: "1 ≤ NV ≤ 1,043,999".
-NV_LIMIT = 1_043_999
 
 MOTION_HANDLERS: dict[str, Handler] = {}
 MOTION_OPS: dict[str, OpFunction] = {}
@@ -262,10 +252,10 @@ class Gear:
         return self.base + (self.path.position(t) if self.path is not None else 0.0)
 
 
-def _check_ratio(ratio: float, master: Axis) -> None:
-    rate = abs(ratio) * master.vl
-    if not 1.0 <= rate < GEAR_RATE_LIMIT:
-        raise CommandFailed(ErrorKind.OUT_OF_RANGE)
+def _check_ratio(ix: Interpreter, mnemonic: str, ratio: float, master: Axis) -> None:
+    """EG (and TX, its row): "(Gear Ratio *X the Master Axis' VL value) is at least 1 and less
+    than the maximum controller step rate of 1,048,574 steps per second"."""
+    ix.check(mnemonic, abs(ratio) * master.vl)
 
 
 def _gearable(slave: Axis, master: Axis) -> bool:
@@ -350,7 +340,7 @@ def _eg(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if count == 0 or geared == 0:
         raise CommandFailed(ErrorKind.OUT_OF_RANGE)
     ratio = float(geared / count)
-    _check_ratio(ratio, master)
+    _check_ratio(ix, "EG", ratio, master)
     text = _gear_text(master.letter, geared_text, master_text)
     ix.enqueue([(slave, Op("EG", (master.index, ratio, text, cmd.text), ix.cost(cell, slave)))])
 
@@ -382,7 +372,7 @@ def _tx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         raise CommandFailed(ErrorKind.GEARED)
     if ratio == 0.0:
         raise CommandFailed(ErrorKind.OUT_OF_RANGE)
-    _check_ratio(ratio, master)
+    _check_ratio(ix, "TX", ratio, master)
     field = (cmd.fields or (None,))[0]
     engage(slave, master, ratio, _gear_text("X", field or "", None), t)
 
@@ -428,7 +418,7 @@ def _bc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
     raw = ix.one(cmd, required=False)
     value = 0 if raw is None else truncate(raw)  # the BC page's format is "BC;"
-    check_range(value, -BACKLASH_LIMIT if axis.is_servo else 0, BACKLASH_LIMIT)
+    ix.check("BC", value, variant="servo" if axis.is_servo else "stepper")
     if cell.kind is Kind.IMMEDIATE:
         set_backlash(axis, value, t)
         return
@@ -500,11 +490,9 @@ def take_up_backlash(axis: Axis, t: float) -> None:
 # -- parameters: TL, LO ----------------------------------------------------------------------
 
 
-def _position(ix: Interpreter, axis: Axis, raw: Decimal) -> float:
-    value = ix.convert(axis, raw, "dist")
-    limit = ix.board.model.position_limit
-    check_range(value, -limit, limit)
-    return value
+def _position(ix: Interpreter, axis: Axis, raw: Decimal, mnemonic: str, operand: int = 1) -> float:
+    """A position in counts (user units applied) against its row (the position range)."""
+    return ix.check(mnemonic, ix.convert(axis, raw, "dist"), operand)
 
 
 def set_travel_limits(axis: Axis, upper: float, lower: float, t: float) -> None:
@@ -520,8 +508,8 @@ def _tl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     off"."""
     axis = ix.axis
     raw_upper, raw_lower = ix.required(cmd, 2)
-    upper = _position(ix, axis, raw_upper)
-    lower = _position(ix, axis, raw_lower)
+    upper = _position(ix, axis, raw_upper, "TL", 1)
+    lower = _position(ix, axis, raw_lower, "TL", 2)
     if lower >= upper and not (upper == 0 and lower == 0):
         raise CommandFailed(ErrorKind.OUT_OF_RANGE)
 
@@ -584,7 +572,7 @@ def _lo(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw_value in items.items():
         axis = ix.board.axes[index]
-        value = _position(ix, axis, raw_value)
+        value = _position(ix, axis, raw_value, "LO")
 
         def apply(a: Axis, when: float, value: float = value) -> None:
             a.load_counter(when, value)
@@ -741,8 +729,8 @@ def _so(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     both "-33,554,431 ... 33,554,431"."""
     axis = ix.axis
     raw_stop, raw_distance = ix.required(cmd, 2)
-    stop = _position(ix, axis, raw_stop)
-    distance = _position(ix, axis, raw_distance)
+    stop = _position(ix, axis, raw_stop, "SO", 1)
+    distance = _position(ix, axis, raw_distance, "SO", 2)
     ix.enqueue([(axis, Op("SO", (stop, distance), ix.cost(cell, axis)))])
 
 
@@ -806,10 +794,10 @@ def _tm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.mode == "single":
         raw = ix.one(cmd)
         assert raw is not None
-        ms = ix.integer(raw, 0, TM_LIMIT)
+        ms = ix.integer(raw, "TM")
         ix.enqueue([(ix.axis, Op("TM", (ms,), ix.cost(cell, ix.axis)))])
         return
-    times = {i: ix.integer(v, 0, TM_LIMIT) for i, v in ix.per_axis(cmd).items()}
+    times = {i: ix.integer(v, "TM") for i, v in ix.per_axis(cmd).items()}
     if not times:
         raise CommandFailed(ErrorKind.MISSING_PARAMETER)
     group = SyncGroup(set(times))
@@ -846,7 +834,7 @@ def _stop(ix: Interpreter, axes: list[Axis], cell: Cell, t: float, kill: bool) -
     executor = ix.board.executor
     for axis in axes:
         executor.flush(axis, t)
-        axis.queue.append(Op("STOP", (kill,), ix.cost(cell, axis)))
+        axis.queue.append(Op("STOP", (kill,), ix.cost(cell, axis), source=ix.board.input_source))
 
 
 @_handles("KS")
@@ -937,8 +925,7 @@ def _nv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """NV# (§5.9.8): "1 ≤ NV ≤ 1,043,999"; the executing contour's next segments go at it."""
     raw = ix.one(cmd)
     assert raw is not None
-    velocity = float(raw)
-    check_range(velocity, 1, NV_LIMIT)
+    velocity = ix.check("NV", float(raw))
     board = ix.board
     origins: dict[float, list[Axis]] = {}
     for axis in board.axes:

@@ -64,6 +64,7 @@ class Op:
     args: tuple[Any, ...] = ()
     slots: int = 0
     group: SyncGroup | None = None
+    source: int = 0  # the session that sent it (Board.input_source when it was queued)
 
 
 @dataclass(slots=True)

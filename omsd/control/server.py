@@ -202,11 +202,22 @@ class ControlServer:
             "rate": service.board.clock.rate,
         }
         state["faults"] = service.faults.as_dict()
+        held = link.held()
         state["link"] = {
             "kind": service.config.link,
             "room": link.room(),
             "pending": getattr(link, "pending", None),
             "waiting": getattr(link, "waiting", None),
+            # what the link holds back from the board and why, in words and in parts
+            "held": None
+            if held is None
+            else {
+                "text": held.describe(),
+                "bytes": held.count,
+                "waiting": held.waiting,
+                "axes": list(held.axes),
+                "since": held.since,
+            },
         }
         state["clients"] = [c.label for c in service.clients]
         return state
@@ -319,7 +330,7 @@ class ControlServer:
         return None
 
     def _op_reset(self, service: BoardService, m: dict[str, Any]) -> Any:
-        service.board.power_cycle(service.clock())
+        service.power_cycle()
         self.log.warning(f"{service.name}: power cycled (control API)")
         return None
 

@@ -16,15 +16,48 @@ from omsd.board import Board, Event
 
 @dataclass(frozen=True)
 class LinkOutput:
+    """What the host is to read, and the events. ``pieces`` splits ``data`` by the session whose
+    conversation produced each part (0: the board's own doing, for whoever holds the line)."""
+
     data: bytes
     events: list[Event] = field(default_factory=list)
+    pieces: list[tuple[int, bytes]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Held:
+    """Host bytes a link holds back from the board, and why (``omsd ctl state``, the log)."""
+
+    count: int
+    waiting: str | None  # "done" or "limit" while a wait character holds them
+    since: float  # board time the wait (or the hold) began
+    axes: tuple[str, ...]  # what the wait waits on: the axes moving or with commands queued
+    session: int  # the session whose wait it is (0: held only because the board is full)
+
+    def describe(self) -> str:
+        if self.waiting is not None:
+            on = f" on {', '.join(self.axes)}" if self.axes else ""
+            return f"waiting for {self.waiting}{on}, {self.count} bytes held"
+        return f"board input buffer full, {self.count} bytes held"
+
+
+def merge(pieces: list[tuple[int, bytes]], session: int, data: bytes) -> None:
+    """Add ``data`` for ``session`` to ``pieces``, joining it to a last piece of the same."""
+    if pieces and pieces[-1][0] == session:
+        pieces[-1] = (session, pieces[-1][1] + data)
+    else:
+        pieces.append((session, data))
 
 
 class Link(Protocol):
+    """Sessions: each connection a transport serves gets a number (``session``, never 0) and
+    what it writes carries it, so that what the board says back, the driver's waits and the
+    bytes held for it belong to that connection and go when it goes (``drop_input``)."""
+
     kind: str
     board: Board
 
-    def from_host(self, data: bytes, now: float) -> int:
+    def from_host(self, data: bytes, now: float, session: int = 0) -> int:
         """Take host bytes; returns how many were taken (the rest must be offered again)."""
         ...
 
@@ -34,6 +67,28 @@ class Link(Protocol):
 
     def next_deadline(self) -> float | None: ...
 
-    def room(self) -> int:
-        """How many more host bytes :meth:`from_host` would take now."""
+    def room(self, session: int = 0) -> int:
+        """How many more host bytes :meth:`from_host` would take now from ``session``."""
+        ...
+
+    def drop_input(self, session: int) -> int:
+        """The session has gone: forget what it wrote that the board has not taken, and any
+        wait of its; returns the number of bytes dropped."""
+        ...
+
+    def reset_input(self) -> int:
+        """The board was reset: drop every held byte and wait; returns the number dropped."""
+        ...
+
+    def held(self) -> Held | None:
+        """What is held back from the board now, if anything."""
+        ...
+
+    def busy(self, session: int) -> bool:
+        """The session has bytes held here or a wait of its own pending."""
+        ...
+
+    def take_notes(self) -> list[str]:
+        """Lines for the traffic log about what the link did (a wait began or ended, held
+        input dropped)."""
         ...

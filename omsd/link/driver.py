@@ -26,6 +26,8 @@ Like every link here this is sans-I/O: bytes and the time go in, bytes come out.
 
 from __future__ import annotations
 
+from collections import deque
+
 from omsd.board import (
     Board,
     CommandErrorEvent,
@@ -35,14 +37,16 @@ from omsd.board import (
     Reply,
     SlipEvent,
 )
-from omsd.link.base import LinkOutput
+from omsd.link.base import Held, LinkOutput, merge
 
+CONTROL_D = 0x04
 CONTROL_Y = b"\x19"
 WAIT_DONE = 0x21  # "!"
 WAIT_LIMIT = 0x40  # "@"
 COMMENT = 0x2A  # "*"
 DEFAULT_EOS = 0x0A
 DEFAULT_BUFFER = 256
+_WAIT_NAMES = {WAIT_DONE: "done", WAIT_LIMIT: "limit"}
 
 
 def _is_control(b: int) -> bool:
@@ -50,7 +54,15 @@ def _is_control(b: int) -> bool:
 
 
 class DriverLink:
-    """One board seen through the DOS device driver."""
+    """One board seen through the DOS device driver.
+
+    Every byte in the driver's buffer belongs to the session that wrote it, and a wait belongs
+    to the session whose ``!`` or ``@`` began it: when that session goes, its bytes and its wait
+    go with it (:meth:`drop_input`), and what the board answers it is not anybody else's
+    (``LinkOutput.pieces``). Control-D from the host, while the driver holds bytes, ends the
+    wait and drops what was held before passing the kill on (the manual's driver would hold the
+    Control-D too, and a board waiting for a done that a kill prevents would never be free).
+    """
 
     kind = "driver"
 
@@ -63,41 +75,127 @@ class DriverLink:
         self.eos = bytes([eos])
         self.buffer_size = buffer_size
         self._pending = bytearray()  # the 'output to board' buffer
-        self._comment = False
+        self._runs: deque[list[int]] = deque()  # [session, count] covering _pending in order
+        self._comment: int | None = None  # the session inside a * comment
         self._waiting: int | None = None  # WAIT_DONE or WAIT_LIMIT while held
+        self._wait_session = 0
         self._wait_since = 0.0
-        self._out = bytearray()
+        self._pieces: list[tuple[int, bytes]] = []
         self._events: list[Event] = []
+        self._notes: list[str] = []
         self._last_done: float | None = None
-        # the time of a DONE / limit that no wait character has claimed yet (each one can
-        # release at most one wait)
-        self._unclaimed: dict[int, float] = {}
+        # the time of a DONE / limit that no wait character of its session has claimed yet
+        # (each one can release at most one wait)
+        self._unclaimed: dict[tuple[int, int], float] = {}
 
     # -- host to board --------------------------------------------------------------------------
 
-    def from_host(self, data: bytes, now: float) -> int:
+    def from_host(self, data: bytes, now: float, session: int = 0) -> int:
         """Put host bytes into the driver's buffer; returns how many fitted."""
+        skipped = 0
+        if (self._pending or self._waiting is not None) and CONTROL_D in data:
+            skipped = data.index(CONTROL_D)
+            dropped = len(self._pending) + skipped
+            what = self._wait_text()
+            self._clear()
+            self._notes.append(f"Control-D: dropped {dropped} held bytes{what}")
+            data = data[skipped:]
         room = self.buffer_size - len(self._pending)
         taken = data[: max(0, room)]
-        self._pending += taken
+        self._append(session, taken)
         self._pass_on(now)
-        return len(taken)
+        return skipped + len(taken)
 
     @property
     def waiting(self) -> str | None:
         """``"done"`` or ``"limit"`` while a ``!`` or ``@`` holds the host's bytes back."""
-        if self._waiting == WAIT_DONE:
-            return "done"
-        if self._waiting == WAIT_LIMIT:
-            return "limit"
-        return None
+        return None if self._waiting is None else _WAIT_NAMES[self._waiting]
 
     @property
     def pending(self) -> int:
         return len(self._pending)
 
-    def room(self) -> int:
+    def room(self, session: int = 0) -> int:
         return self.buffer_size - len(self._pending)
+
+    def held(self) -> Held | None:
+        if self._waiting is None and not self._pending:
+            return None
+        waiting = self.waiting
+        return Held(
+            count=len(self._pending),
+            waiting=waiting,
+            since=self._wait_since,
+            axes=tuple(self.board.busy_axes()) if waiting else (),
+            session=self._wait_session if waiting else 0,
+        )
+
+    def busy(self, session: int) -> bool:
+        if self._waiting is not None and self._wait_session == session:
+            return True
+        return any(run[0] == session for run in self._runs)
+
+    def drop_input(self, session: int) -> int:
+        dropped = 0
+        kept = bytearray()
+        runs: deque[list[int]] = deque()
+        offset = 0
+        for owner, count in self._runs:
+            if owner == session:
+                dropped += count
+            else:
+                kept += self._pending[offset : offset + count]
+                runs.append([owner, count])
+            offset += count
+        self._pending, self._runs = kept, runs
+        if self._waiting is not None and self._wait_session == session:
+            self._waiting = None
+        if self._comment == session:
+            self._comment = None
+        for key in [k for k in self._unclaimed if k[1] == session]:
+            del self._unclaimed[key]
+        return dropped
+
+    def reset_input(self) -> int:
+        dropped = len(self._pending)
+        self._clear()
+        return dropped
+
+    def take_notes(self) -> list[str]:
+        notes, self._notes = self._notes, []
+        return notes
+
+    def _clear(self) -> None:
+        self._pending = bytearray()
+        self._runs.clear()
+        self._waiting = None
+        self._comment = None
+        self._unclaimed.clear()
+
+    def _wait_text(self) -> str:
+        held = self.held()
+        return f" ({held.describe()})" if held is not None and held.waiting else ""
+
+    def _append(self, session: int, data: bytes) -> None:
+        if not data:
+            return
+        self._pending += data
+        runs = self._runs
+        if runs and runs[-1][0] == session:
+            runs[-1][1] += len(data)
+        else:
+            runs.append([session, len(data)])
+
+    def _consume(self, n: int) -> None:
+        del self._pending[:n]
+        runs = self._runs
+        while n:
+            run = runs[0]
+            k = min(n, run[1])
+            run[1] -= k
+            n -= k
+            if not run[1]:
+                runs.popleft()
 
     def _pass_on(self, now: float) -> None:
         """Feed the buffer to the board, up to a wait character or a full board buffer."""
@@ -110,41 +208,55 @@ class DriverLink:
 
     def _step(self, now: float) -> bool:
         """One piece of the buffer: a comment, a wait character or a run of characters for the
-        board. Returns False when nothing could be passed on."""
+        board, all of one session. Returns False when nothing could be passed on."""
         pending = self._pending
         if self._waiting is not None or not pending:
             return False
-        if self._comment:
-            j = 0
-            while j < len(pending) and not _is_control(pending[j]):
-                j += 1
-            del pending[:j]
-            if not pending:
-                return j > 0
-            self._comment = False  # the control character itself goes to the board
+        session, length = self._runs[0]
+        if self._comment is not None:
+            if self._comment != session:
+                self._comment = None  # another session's bytes end an unfinished comment
+            else:
+                j = 0
+                while j < length and not _is_control(pending[j]):
+                    j += 1
+                self._consume(j)
+                if j == length:
+                    return j > 0
+                self._comment = None  # the control character itself goes to the board
+                return True
         b = pending[0]
         if b == COMMENT:
-            self._comment = True
-            del pending[0]
+            self._comment = session
+            self._consume(1)
             return True
         if b in (WAIT_DONE, WAIT_LIMIT):
-            del pending[0]
+            self._consume(1)
             # a DONE (or limit) caused by what was sent at this same instant counts: on the real
             # card the interrupt comes well after the driver has moved on to the wait character
-            seen = self._unclaimed.pop(b, None)
+            seen = self._unclaimed.pop((b, session), None)
             if seen is not None and seen >= now:
                 if b == WAIT_DONE:
-                    self.board.receive(CONTROL_Y, now)
+                    self.board.receive(CONTROL_Y, now, session)
                 return True
             self._waiting = b
+            self._wait_session = session
             self._wait_since = now
+            self._notes.append(f"{chr(b)} holds the host's input: {self._wait_text()[2:-1]}")
             return True
         j = 0
-        while j < len(pending) and pending[j] not in (COMMENT, WAIT_DONE, WAIT_LIMIT):
+        while j < length and pending[j] not in (COMMENT, WAIT_DONE, WAIT_LIMIT):
             j += 1
-        sent = self.board.receive(bytes(pending[:j]), now)
-        del pending[:sent]
+        sent = self.board.receive(bytes(pending[:j]), now, session)
+        self._consume(sent)
         return sent > 0
+
+    def _release(self, now: float) -> None:
+        what = _WAIT_NAMES[self._waiting] if self._waiting is not None else "?"
+        self._waiting = None
+        held = len(self._pending)
+        after = f"{now - self._wait_since:.3f} s"
+        self._notes.append(f"{what} after {after}: passing on {held} held bytes")
 
     # -- board to host --------------------------------------------------------------------------
 
@@ -152,45 +264,50 @@ class DriverLink:
         """Let the board run to ``now``; return what the host is to receive, and the events."""
         self.board.advance(now)
         self._pass_on(now)
-        data, self._out = bytes(self._out), bytearray()
+        pieces, self._pieces = self._pieces, []
         events, self._events = self._events, []
-        return LinkOutput(data, events)
+        data = pieces[0][1] if len(pieces) == 1 else b"".join(p[1] for p in pieces)
+        return LinkOutput(data, events, pieces)
 
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
 
     def _collect(self, now: float) -> None:
         board = self.board
-        for item in board.take_output():
+        out, sources = board.take_output_sourced()
+        pieces = self._pieces
+        for item, source in zip(out, sources, strict=True):
             if isinstance(item, Reply):
                 if item.text is not None:
-                    self._out += item.text + self.eos
+                    merge(pieces, source, item.text + self.eos)
                 else:
                     # echoed characters: the driver "strips off the LF and CR's"
-                    self._out += item.data.replace(b"\n", b"").replace(b"\r", b"")
+                    merge(pieces, source, item.data.replace(b"\n", b"").replace(b"\r", b""))
                 continue
             self._events.append(item)
             # the interrupt service routine reads the status register (clearing it) first
             board.read_status_register(now)
+            mine = self._waiting is not None and source in (self._wait_session, 0)
             if isinstance(item, CommandErrorEvent):
-                self._out += b"#" + self.eos
+                merge(pieces, source, b"#" + self.eos)
             elif isinstance(item, LimitEvent):
-                self._out += b"@" + self.eos
-                if self._waiting == WAIT_LIMIT and item.time >= self._wait_since:
-                    self._waiting = None
+                merge(pieces, source, b"@" + self.eos)
+                if mine and self._waiting == WAIT_LIMIT and item.time >= self._wait_since:
+                    self._release(now)
                 else:
-                    self._unclaimed[WAIT_LIMIT] = item.time
+                    self._unclaimed[(WAIT_LIMIT, source)] = item.time
             elif isinstance(item, SlipEvent):
-                self._out += b"$" + self.eos
+                merge(pieces, source, b"$" + self.eos)
             elif isinstance(item, DoneEvent):
                 done = board.read_done_register(now)
                 if not (done == 0 and self._last_done == item.time):
                     # completions on the same sample are one interrupt: the first read of the
                     # register has every bit, a second marker would only say "nothing"
-                    self._out += b"!" + bytes([done]) + self.eos
+                    merge(pieces, source, b"!" + bytes([done]) + self.eos)
                 self._last_done = item.time
-                if self._waiting == WAIT_DONE and item.time >= self._wait_since:
-                    self._waiting = None
-                    board.receive(CONTROL_Y, now)
+                if mine and self._waiting == WAIT_DONE and item.time >= self._wait_since:
+                    session = self._wait_session
+                    self._release(now)
+                    board.receive(CONTROL_Y, now, session)
                 else:
-                    self._unclaimed[WAIT_DONE] = item.time
+                    self._unclaimed[(WAIT_DONE, source)] = item.time

@@ -11,7 +11,7 @@ events (for the traffic log), never as bytes.
 from __future__ import annotations
 
 from omsd.board import Board, CommandErrorEvent, Event, Reply
-from omsd.link.base import LinkOutput
+from omsd.link.base import Held, LinkOutput, merge
 
 
 class RawLink:
@@ -20,24 +20,42 @@ class RawLink:
     def __init__(self, board: Board) -> None:
         self.board = board
 
-    def from_host(self, data: bytes, now: float) -> int:
-        return self.board.receive(data, now)
+    def from_host(self, data: bytes, now: float, session: int = 0) -> int:
+        return self.board.receive(data, now, session)
 
     def to_host(self, now: float) -> LinkOutput:
-        self.board.advance(now)
-        out = bytearray()
+        board = self.board
+        board.advance(now)
+        out, sources = board.take_output_sourced()
+        pieces: list[tuple[int, bytes]] = []
         events: list[Event] = []
-        for item in self.board.take_output():
+        for item, source in zip(out, sources, strict=True):
             if isinstance(item, Reply):
-                out += item.data
+                merge(pieces, source, item.data)
             else:
                 events.append(item)
                 if isinstance(item, CommandErrorEvent):
-                    out += b"#"
-        return LinkOutput(bytes(out), events)
+                    merge(pieces, source, b"#")
+        data = pieces[0][1] if len(pieces) == 1 else b"".join(p[1] for p in pieces)
+        return LinkOutput(data, events, pieces)
 
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
 
-    def room(self) -> int:
-        return self.board.input_room()
+    def room(self, session: int = 0) -> int:
+        return self.board.input_room(session)
+
+    def drop_input(self, session: int) -> int:
+        return 0  # nothing is held here: what the board has not taken stays with the transport
+
+    def reset_input(self) -> int:
+        return 0
+
+    def held(self) -> Held | None:
+        return None
+
+    def busy(self, session: int) -> bool:
+        return False
+
+    def take_notes(self) -> list[str]:
+        return []

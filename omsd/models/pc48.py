@@ -15,7 +15,13 @@ different tables for one command, the choice is noted beside the row:
   AA mode"; the table is taken to be transposed. WA and SW are marked "Immediate" (they take no
   queue space) but make the axes wait, so they are queued with 0 slots.
 * SE: "available in single axis mode only" but the table gives "AA - AM 3": the table wins.
-* GO/GD: Table A by encoder option plus Table B by ramp type, as the text says to add them.
+* GO/GD: Table A by encoder option; Table B (by ramp type) is added on encoder versions only:
+  "To find the total queue requirements for a specific application, find the appropriate value
+  in Table A. If the board is an encoder version, add the value found in Table B to the value
+  from Table A" (the VS4 manual's Table B is titled "ADDITIONAL ENCODER QUEUE REQUIREMENTS").
+  So a board without encoders is charged GO 4 / 5 and GD 5 / 6 (single axis / AA,AM) whatever
+  the ramp; an encoder version GO 7 / 8 + 6, 15, 15 and GD 8 / 9 + 6, 15, 15 (AA,AM linear,
+  parabolic, cosine).
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from omsd.models.spec import (
     NV,
     CommandSpec,
     Model,
+    encoder_version,
     flush,
     per_axis,
     q,
@@ -87,8 +94,10 @@ PC48_COMMANDS: dict[str, CommandSpec] = {
         _c("MO", False, q(1), NV, not_on_encoder_models=True),
         _c("RM", True, q(1), NV),
         # 6.8 move execution
-        _c("GO", False, qe(4, 7), qe(5, 8) + qr(6, 15, 15)),
-        _c("GD", False, qe(5, 8), qe(6, 9) + qr(6, 15, 15)),
+        # Table A (NO ENCODER / ENCODER) + Table B (LINEAR / PARABOLIC / COSINE, encoder
+        # versions only; its AX - AS row is 0 0 0)
+        _c("GO", False, qe(4, 7), qe(5, 8) + encoder_version(qr(6, 15, 15))),
+        _c("GD", False, qe(5, 8), qe(6, 9) + encoder_version(qr(6, 15, 15))),
         _c("JG", True, q(2), NV),
         _c("JF", True, qe(2, 3), NV),
         _c("VS", True, q(5), NV, single_axes="X"),

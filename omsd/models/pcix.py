@@ -78,7 +78,8 @@ Where the manual contradicts itself (digest §8.2)
 * PR: the page gives "PR#;" only; it is "similar to the PN command", and PN says "no parameter
   supplied defaults to … 3 steps", so PR may also be sent bare.
 * AC range: the table-independent bound "1 ≤ AC ≤ 8,000,000" (RANGE line) wins over the prose
-  "less than 999,999,999"; it is inclusive, see ``max_acceleration`` below.
+  "less than 999,999,999"; it is inclusive (every operand range is a row of
+  ``omsd/protocol/ranges_pcix.py``).
 
 Motor types (the manual's lost icons, read from the prose)
 ----------------------------------------------------------
@@ -130,9 +131,9 @@ contradicts itself:
   "16 configurable … 8 inputs and 8 outputs" of §5.5.2 and "Up to 12 bits" of Appendix C are
   not taken.
 * Velocity: VL "1 ≤ VL ≤ 1044000"; JG "-1,043,999 ≤ JG ≤ 1,043,999" (``max_jog_velocity``).
-* Acceleration: "RANGE: 1 ≤ AC ≤ 8,000,000". ``Model.max_acceleration`` is an exclusive bound
-  (``0 < value < max_acceleration``) and an AC in user units may be fractional, so the bound is
-  the next float above 8,000,000: exactly 8,000,000 is accepted and nothing above it.
+* Acceleration: "RANGE: 1 ≤ AC ≤ 8,000,000", the row the interpreter checks
+  (``omsd/protocol/ranges_pcix.py``). ``Model.max_acceleration``, described as an exclusive
+  bound, is the next float above 8,000,000.
 * Defaults: VL 200,000 ("The factory default is 200,000 steps per second"; §2.8's prose
   "100,000" is not taken), AC 2,000,000, CV 1000. Position range ±33,554,431 (LP and SO; the
   "±33,544,431" of IN/MV/TL and the ±33,500,000 of Appendix C are taken as misprints/roundings).
@@ -302,7 +303,8 @@ PCIX_COMMANDS: dict[str, CommandSpec] = {
         # 5.5.2 general purpose I/O
         _c("BH", True, q(2), q(3), q(2)),
         _c("BL", True, q(2), q(3), q(2)),
-        _c("BS", True, q(2), NV),
+        # "The mask must be in ASCII hex format": the operand is read as hexadecimal digits
+        _c("BS", True, q(2), NV, hex_operand=True),
         _both("BX"),
         _both("RB"),  # "- AX – AT Immediate", "RB AA-AM Immediate"
         # 5.5.3 home control

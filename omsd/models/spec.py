@@ -100,6 +100,16 @@ def qe(no_encoder: int, encoder: int) -> Cell:
     return Cell(Kind.QUEUED, ((no_encoder,) * 5, (encoder,) * 5))
 
 
+def encoder_version(cell: Cell) -> Cell:
+    """``cell``'s slots charged on an encoder version of the board only, nothing without the
+    option: PC48 §6.8 GO/GD, "If the board is an encoder version, add the value found in Table
+    B to the value from Table A" (the VS4 manual titles it "ADDITIONAL ENCODER QUEUE
+    REQUIREMENTS")."""
+    return Cell(
+        cell.kind, (_ZERO, cell.slots[1]), cell.per_axis, cell.per_segment, cell.pa, cell.settle
+    )
+
+
 def flush(n: int) -> Cell:
     return Cell(Kind.FLUSH, ((n,) * 5, (n,) * 5))
 
@@ -162,6 +172,8 @@ class Model:
     commands: Mapping[str, CommandSpec]
     firmware: str
     wy_format: str  # str.format with model, family, firmware, axes (count), serial
+    # The limits below describe the product; the interpreter checks operands against the range
+    # tables (omsd/protocol/ranges_pc48.py, ranges_pcix.py), which tests hold these to.
     max_velocity: float
     max_acceleration: float  # exclusive upper bound
     default_velocity: float

@@ -1,1 +1,2 @@
-"""The OMS command language: a streaming lexer and operand values (pure)."""
+"""The OMS command language: a streaming lexer, operand values and the operand range tables
+(pure)."""

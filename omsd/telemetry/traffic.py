@@ -65,10 +65,13 @@ one-to-one mapping (``data.encode("latin-1")`` gives the bytes back; JSON escape
 characters as ``\\u0004`` and so on); ``hex`` is the same bytes in hex, for grep and for tools
 without latin-1. :meth:`Traffic.from_record` reads a traffic object back.
 
-The file is opened for appending (``O_APPEND``, created ``0644`` if missing) and every line is
-handed to the kernel with one ``write(2)`` of the whole line, with no buffering in this process:
-when the daemon crashes, even by SIGKILL, every record logged before is in the file, and at most
-the line being written is cut short. (A power failure is another matter: there is no fsync.)
+The file is opened for appending (``O_APPEND``; created ``0600`` if missing, or ``0640`` in the
+group given, :func:`omsd.files.open_log`; an existing file keeps its permissions) and every line
+is handed to the kernel with one ``write(2)`` of the whole line, with no buffering in this
+process: when the daemon crashes, even by SIGKILL, every record logged before is in the file,
+and at most the line being written is cut short. (A power failure is another matter: there is
+no fsync.) :meth:`TrafficLog.reopen` (the daemon's SIGHUP) opens the path again, for logrotate:
+after a rotation that renamed the file, the lines go to a new file at the path.
 
 The log is not thread-safe; the daemon calls it from its one event-loop thread.
 """
@@ -89,6 +92,8 @@ from typing import Any, TextIO
 from rich.console import Console
 from rich.style import Style
 from rich.text import Text
+
+from omsd.files import open_log
 
 VIEWS = ("auto", "rich", "plain", "off")
 """The accepted values of ``TrafficLog(view=...)``."""
@@ -239,7 +244,8 @@ class TrafficLog:
     JSON-lines file to append to, opened at once (:class:`TrafficLogError`, an ``OSError``,
     if it cannot be); ``stream`` where the view is written (standard error by default); ``env``
     the environment in which ``JOURNAL_STREAM`` is looked up (``os.environ`` by default);
-    ``clock`` the wall clock for :meth:`info`, :meth:`warning` and :meth:`error`.
+    ``clock`` the wall clock for :meth:`info`, :meth:`warning` and :meth:`error`; ``group``
+    the group a file created here is given (mode 0640; without one it is 0600).
 
     A stream that fails (a closed pipe) is given up silently and the file goes on; a file that
     fails (a full disk) is reported once as an error on the stream and then closed.
@@ -253,6 +259,7 @@ class TrafficLog:
         env: Mapping[str, str] | None = None,
         *,
         clock: Callable[[], float] = _time.time,
+        group: str | None = None,
     ) -> None:
         if view not in VIEWS:
             raise ValueError(f"unknown log view {view!r}: expected one of {', '.join(VIEWS)}")
@@ -267,6 +274,7 @@ class TrafficLog:
         self.journal = journal
         """Whether plain lines carry sd-daemon(3) level prefixes."""
         self.path = file
+        self.group = group
         self._console: Console | None = None
         if view == "rich":
             self._console = Console(
@@ -280,11 +288,9 @@ class TrafficLog:
         self._fd: int | None = None
         if file is not None:
             try:
-                self._fd = os.open(
-                    file, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_CLOEXEC, 0o644
-                )
+                self._fd = open_log(file, group)
             except OSError as exc:
-                raise TrafficLogError(exc.errno, exc.strerror, str(file)) from exc
+                raise TrafficLogError(exc.errno, exc.strerror or str(exc), str(file)) from exc
 
     # ----------------------------------------------------------------- public interface
 
@@ -328,6 +334,24 @@ class TrafficLog:
     def error(self, message: str) -> None:
         """Log an error."""
         self._message("error", SD_ERR, message)
+
+    def reopen(self) -> bool:
+        """Open the file's path again and write there from now on (logrotate's "reopen your
+        log files", the daemon's SIGHUP): after a rotation that renamed the file, a new one is
+        created (0600, or 0640 in the group). Also a file given up after a failed write gets
+        another chance. ``False`` if there is no file or it cannot be opened (logged; the old
+        one, if any, is still written)."""
+        if self.path is None:
+            return False
+        try:
+            fd = open_log(self.path, self.group)
+        except OSError as exc:
+            self.error(f"traffic log {self.path}: cannot reopen: {exc.strerror or exc}")
+            return False
+        old, self._fd = self._fd, fd
+        if old is not None:
+            os.close(old)
+        return True
 
     def close(self) -> None:
         """Flush the stream and close the file; later calls do nothing. The stream stays usable."""

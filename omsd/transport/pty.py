@@ -5,17 +5,25 @@ slave device through a stable symlink and talks to the board. The daemon:
 
 * creates the pty raw (no echo, no CR/LF translation, no signal characters), so bytes pass
   through untouched whatever the client sets up;
-* keeps the slave open for its whole life: otherwise the master sees EIO (and a read loop spins)
-  every time the last client closes; with the slave held, clients open, close and reopen it any
-  number of times and the board never notices;
+* follows its clients: from the first open of the slave to the last close is one session of
+  the board's service (:mod:`omsd.service`). inotify reports every open and close
+  (:mod:`omsd.transport.inotify`), and the master's hang-up (POLLHUP: nobody has the slave
+  open) tells a last close from the close of one of several programs; the master is read only
+  while somebody has the pty open, so nothing spins and no timer runs while nobody does. When
+  a session ends, what its clients wrote before they closed is read and offered to the board,
+  what the board has not taken is dropped, what they left unread in the terminal is flushed,
+  and nothing is written to the pty until it is opened again: the next program starts clean,
+  even when it opened the pty before the daemon saw the last one close. A program that reopens
+  the pty and reads within the moment the daemon takes to see the close can still find the
+  last answers (the kernel gives no way to flush at the close itself). Without inotify (not
+  Linux) the daemon holds the slave open and the pty is one session for its life;
 * gives the slave device group permissions (mode 0660 by default, optionally another group) so
   users of that group can open it;
 * points the symlink at the slave atomically (a new link is renamed over the old one) and
   removes it on exit if it still points at this pty.
 
-Output written while no client has the pty open waits in the terminal's buffer like bytes on a
-serial line nobody is reading; beyond what the kernel buffers, and a bounded backlog here, it
-is dropped (a serial port would overwrite it too).
+Output for a client that does not read waits in the terminal's buffer; beyond what the kernel
+buffers, and a bounded backlog here, it is dropped (a serial port would overwrite it too).
 """
 
 from __future__ import annotations
@@ -26,10 +34,12 @@ import errno
 import grp
 import os
 import pathlib
+import select
 import termios
 import tty
 
 from omsd.service import BoardService
+from omsd.transport.inotify import CLOSED, OPENED, OpenWatch, watch_opens
 
 MAX_BACKLOG = 64 * 1024
 
@@ -43,6 +53,11 @@ class PtyEndpoint:
         self.group = group
         self.mode = mode
         self.label = f"pty:{link}"
+        self.session = 0
+        self.connected = False  # a session is running: someone has the slave open
+        self.openers = 0  # clients with the slave open, as inotify counted them (a guess)
+        self._watch: OpenWatch | None = None
+        self._sessions = 0  # sessions begun (the first is the one attach() opens)
         self.master = -1
         self.slave = -1
         self.device = ""
@@ -63,14 +78,137 @@ class PtyEndpoint:
             gid = grp.getgrnam(self.group).gr_gid if self.group else -1
             os.chown(self.device, -1, gid)
             os.chmod(self.device, self.mode)
+            # before the link exists, so that no client's open can come unseen
+            self._watch = watch_opens(self.device, self._opened_or_closed)
             self._place_link()
         except BaseException:
             self._close_fds()
             raise
-        self._loop.add_reader(self.master, self._readable)
-        self._reading = True
         self.service.attach(self)
+        if self._watch is None:  # no inotify: hold the slave, one session for ever
+            self.connected = True
+            self._loop.add_reader(self.master, self._readable)
+            self._reading = True
+        else:
+            os.close(self.slave)  # nobody has it open: the master hangs up until somebody does
+            self.slave = -1
+            self._loop.add_reader(self._watch.fd, self._watch.readable)
         return self.device
+
+    # -- sessions -------------------------------------------------------------------------------
+
+    def _hung_up(self) -> bool:
+        """Nobody has the slave open (the master polls POLLHUP)."""
+        poller = select.poll()
+        poller.register(self.master, select.POLLIN)
+        return any(ev & select.POLLHUP for _, ev in poller.poll(0))
+
+    def _opened_or_closed(self, events: list[str]) -> None:
+        """inotify's opens and closes, in order. A close that leaves the count at zero ends
+        the session if the master has hung up, or if an open follows it (the last client went
+        and another came before the daemon looked); otherwise two opens were merged into one
+        event and somebody still has the pty."""
+        i = 0
+        while i < len(events):
+            event = events[i]
+            i += 1
+            if event == OPENED:
+                self.openers += 1
+                if not self.connected:
+                    self._connect()
+                continue
+            self.openers = max(0, self.openers - 1)
+            if self.openers or not self.connected:
+                continue
+            if self._hung_up():
+                events.extend(self._session_over(keep_input=False, upcoming=events[i:]))
+                continue
+            watch = self._watch
+            if OPENED not in events[i:] and watch is not None:
+                events.extend(watch.pending())  # an open that came since is queued by now
+            if OPENED in events[i:]:
+                # reopened: what is unread in the master may be the newcomer's already
+                events.extend(self._session_over(keep_input=True, upcoming=events[i:]))
+            else:
+                self.openers = 1  # two opens were one event: somebody still has it open
+
+    def _connect(self) -> None:
+        self.connected = True
+        if self._sessions:
+            self.service.open_session(self)
+        self._sessions += 1
+        self.service.log.info(f"{self.service.name}: {self.label} opened")
+        if not self._reading and self._loop is not None and not self._pending:
+            self._loop.add_reader(self.master, self._readable)
+            self._reading = True
+
+    def _session_over(self, keep_input: bool, upcoming: list[str]) -> list[str]:
+        """The last client closed the pty: what it wrote before it closed is read (as a TCP
+        client's last bytes are) and offered to the board; then its session ends, and nothing
+        of it is left for the next one. Returns the opens and closes queued meanwhile (to be
+        taken in order); a client that opened while the watch was paused for the flush is
+        found by the master no longer hanging up."""
+        if not keep_input:
+            self._read_all()
+        self.connected = False
+        self.openers = 0
+        unsent = len(self._pending)
+        self._pending.clear()
+        self._backlog.clear()
+        loop = self._loop
+        if loop is not None:
+            if self._writing:
+                loop.remove_writer(self.master)
+                self._writing = False
+            if self._reading:
+                loop.remove_reader(self.master)
+                self._reading = False
+        queued = self._flush_terminal()
+        self.service.log.info(f"{self.service.name}: {self.label} closed")
+        self.service.end_session(self, unsent, "closed")
+        if self._watch is not None:
+            queued += self._watch.pending()
+        if OPENED not in upcoming + queued and not self._hung_up():
+            self.openers = 1
+            self._connect()
+        return queued
+
+    def _flush_terminal(self) -> list[str]:
+        """Throw away what the last clients left unread in the terminal. Only the slave's side
+        can flush its input, so the daemon opens it for a moment; returns the opens and closes
+        of others queued meanwhile (in order), without the daemon's own."""
+        watch = self._watch
+        if watch is None:
+            with contextlib.suppress(OSError, termios.error):
+                termios.tcflush(self.slave, termios.TCIFLUSH)
+            return []
+        before = watch.pending()  # so that the daemon's own open follows nothing unread
+        try:
+            fd = os.open(self.device, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        except OSError:
+            return before
+        with contextlib.suppress(termios.error):
+            termios.tcflush(fd, termios.TCIFLUSH)
+        os.close(fd)
+        after = watch.pending()
+        if OPENED in after:  # the daemon's own open, and the first close after it
+            at = after.index(OPENED)
+            del after[at]
+            if CLOSED in after[at:]:
+                del after[after.index(CLOSED, at)]
+        return before + after
+
+    def _read_all(self) -> None:
+        while True:
+            try:
+                data = os.read(self.master, 4096)
+            except OSError:  # BlockingIOError: all read
+                break
+            if not data:
+                break
+            self._pending += data
+        if self._pending:
+            self._push()
 
     def _place_link(self) -> None:
         self.link.parent.mkdir(parents=True, exist_ok=True)
@@ -83,12 +221,18 @@ class PtyEndpoint:
     # -- input ----------------------------------------------------------------------------------
 
     def _readable(self) -> None:
+        if self._watch is not None:
+            self._watch.drain()  # a close and an open come before the bytes written after them
+            if not self._reading:
+                return  # the session ended: what was unread went with it
         try:
             data = os.read(self.master, 4096)
         except BlockingIOError:
             return
         except OSError as exc:
-            if exc.errno == errno.EIO:  # pragma: no cover - the slave is held open
+            if exc.errno == errno.EIO:  # the last client closed the slave
+                if self.connected:
+                    self._opened_or_closed(self._session_over(keep_input=True, upcoming=[]))
                 return
             raise
         if data:
@@ -115,7 +259,7 @@ class PtyEndpoint:
     # -- output ---------------------------------------------------------------------------------
 
     def send(self, data: bytes) -> None:
-        if self.master < 0:
+        if self.master < 0 or not self.connected:
             return
         self._backlog += data
         if len(self._backlog) > MAX_BACKLOG:
@@ -153,6 +297,12 @@ class PtyEndpoint:
             if self._writing:
                 loop.remove_writer(self.master)
         self._reading = self._writing = False
+        self.connected = False
+        if self._watch is not None:
+            if loop is not None and self._watch.fd >= 0:
+                loop.remove_reader(self._watch.fd)
+            self._watch.close()
+            self._watch = None
         try:
             if self.link.is_symlink() and os.readlink(self.link) == self.device:
                 self.link.unlink()

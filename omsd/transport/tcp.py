@@ -6,6 +6,11 @@ port, so one TCP client at a time. With ``takeover`` (the default) a new connect
 one already there, which is closed; a client that died without closing its socket can thus
 always reconnect. With ``refuse`` the newcomer gets one line saying the board is busy and is
 closed. The pty of a board is not a connection and is not affected.
+
+Each connection is a session of the board's service (:mod:`omsd.service`): when it goes, what it
+wrote and the board has not taken is dropped, and what the board still says for it is not the
+next client's. A client that shuts down its sending side (``nc -N``, ``shutdown(SHUT_WR)``) is
+kept open until what it sent is done, at most the board's ``linger`` seconds, then closed.
 """
 
 from __future__ import annotations
@@ -29,10 +34,12 @@ class TcpClient(asyncio.Protocol):
         self.endpoint = endpoint
         self.policy = policy
         self.label = endpoint
+        self.session = 0
         self.transport: asyncio.Transport | None = None
         self._pending = bytearray()
         self._paused = False
         self._dropping = False
+        self.lingering = False  # it shut down its sending side and waits for its answers
 
     # -- asyncio.Protocol -----------------------------------------------------------------------
 
@@ -48,7 +55,9 @@ class TcpClient(asyncio.Protocol):
             self.transport = None
             return
         others = [c for c in service.clients if isinstance(c, TcpClient)]
-        if others and self.policy == "refuse":
+        # one that has stopped sending and only waits for its answers does not hold the board
+        # against a newcomer: it is taken over whatever the policy
+        if any(not c.lingering for c in others) and self.policy == "refuse":
             service.log.warning(f"{service.name}: refused {self.label}: board busy")
             self.transport.write(
                 f"omsd: board {service.name} is busy: another client is connected\r\n".encode()
@@ -69,19 +78,35 @@ class TcpClient(asyncio.Protocol):
         self._push()
 
     def eof_received(self) -> bool:
-        return False  # close our side too
+        """The client shut down its sending side: keep the connection (True) while what it sent
+        is still to be answered (``linger``); close our side too (False) when nothing is."""
+        if self.transport is None:
+            return False
+        keep = self.service.half_closed(self)
+        self.lingering = keep
+        if keep:
+            self.service.log.info(
+                f"{self.service.name}: {self.label} stopped sending; kept open for its answers"
+            )
+        return keep
 
     def connection_lost(self, exc: Exception | None) -> None:
         if self.transport is not None:
             self.service.log.info(f"{self.service.name}: {self.label} disconnected")
         self.transport = None
+        self.service.end_session(self, len(self._pending), "disconnected")
         self.service.detach(self)
-        # what the client wrote before it went is still the board's input
-        if self._pending:
-            self.service.orphan_input(bytes(self._pending))
-            self._pending = bytearray()
+        self._pending = bytearray()
 
     # -- the service's side ---------------------------------------------------------------------
+
+    @property
+    def unsent(self) -> int:
+        return len(self._pending)
+
+    def finish(self) -> None:
+        """Close once what has been written to the socket has gone (asyncio flushes first)."""
+        self.close()
 
     def _push(self) -> None:
         if self._pending:
@@ -117,9 +142,11 @@ class TcpClient(asyncio.Protocol):
         transport.write(data)
 
     def hand_over(self) -> None:
-        """Close this connection for a newcomer, keeping what it wrote: bytes already in the
-        socket that asyncio has not read yet (the old client may have written and hung up in
-        the same instant the new one connected) go to the board first."""
+        """Close this connection for a newcomer. Bytes already in the socket that asyncio has
+        not read yet (the old client may have written and hung up in the same instant the new
+        one connected) are offered to the board first, as this client's: what the board takes
+        runs (as on the card, which had them on its wire), its answers are discarded with the
+        session, and what it cannot take is dropped."""
         transport = self.transport
         if transport is None:
             return
@@ -134,10 +161,11 @@ class TcpClient(asyncio.Protocol):
                 if not data:
                     break
                 self._pending += data
-        self.service.detach(self)
         if self._pending:
-            self.service.orphan_input(bytes(self._pending))
-            self._pending = bytearray()
+            self._push()
+        self.service.end_session(self, len(self._pending), "taken over")
+        self.service.detach(self)
+        self._pending = bytearray()
         self.close()
 
     def close(self) -> None:
@@ -147,8 +175,9 @@ class TcpClient(asyncio.Protocol):
     def cut(self) -> None:
         """The cable was cut (control API): the client sees EOF; what it wrote and the board has
         not taken is lost with the cable."""
-        self._pending = bytearray()
+        self.service.end_session(self, len(self._pending), "cut off")
         self.service.detach(self)
+        self._pending = bytearray()
         self.close()
 
 

@@ -553,16 +553,18 @@ def test_hm_final_counter_is_home_value_plus_stop_distance():
 
 def test_e63_hr_from_above_finds_upper_edge():
     """HR moves negative and the home condition becomes true when the carriage enters the switch
-    window from above (physical position < 5100). Start at 8000: phys(t) = 8050 - 1000 t
-    crosses 5100 at t = 2.95 s, first tick 6042; HR-300 loads -300 there; 50 steps of
-    deceleration end at -350."""
+    window from above: the switches see whole steps (``Axis.carriage``), so the first step inside
+    ``[5000, 5100)`` is 5099. Start at 8000: the position is x(t) = 50 - 1000 t after the 0.1 s
+    ramp, and the counter (steps emitted going down: ceil) reaches -2901 (carriage 5099) once
+    x <= -2901, at t = 2.951 s, first tick ceil(2.951 * 2048) = ceil(6043.65) = 6044; HR-300
+    loads -300 there; 50 steps of deceleration end at -350."""
     world = AxisWorld(start_position=8000, home_low=5000, home_high=5100)
     h = Harness("PC48-4", world={"X": world})
     h.send("VL1000 AC10000 HR-300\r")
-    edge = 6042 / RATE
-    assert first_tick(2.95) == edge
+    edge = 6044 / RATE
+    assert first_tick(2.951) == edge
     h.until(edge - SAMPLE)
-    assert rp(h) == math.trunc(-(1000 * (edge - SAMPLE) - 50))  # -2899
+    assert rp(h) == -2900  # ceil(50 - 1000 * 6043 / 2048) = ceil(-2900.68): still at step 5100
     h.until(edge)
     assert rp(h) == -300
     h.run()
@@ -588,12 +590,16 @@ def test_e64_km_stops_at_once_without_loading_counter():
 
 
 def test_e65_kr_stops_at_once_without_loading_counter():
+    """KR from above stops on the first whole step inside the window (5099, counter -2901, the
+    tick 6044 of test_e63) and the home input reads true there: a carriage stopped by the switch
+    is on the switch."""
     world = AxisWorld(start_position=8000, home_low=5000, home_high=5100)
     h = Harness("PC48-4", world={"Y": world})
     h.send("AY VL1000 AC10000 KR")
     h.run()
-    assert h.t == 6042 / RATE
-    assert h.position("Y") == -2900  # trunc(-(1000 * 2.9502 - 50))
+    assert h.t == 6044 / RATE
+    assert h.position("Y") == -2901  # ceil(50 - 1000 * 6044 / 2048) = ceil(-2901.17)
+    assert h.query("RA") == b"\n\r\rMNNH\n\r\r"
 
 
 def test_hm_needs_an_edge_not_a_level():

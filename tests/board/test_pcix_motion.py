@@ -1028,9 +1028,9 @@ def test_geared_axis_follows_a_contour() -> None:
 
 
 def test_every_error_is_a_command_error_event() -> None:
-    """Out-of-range values set the command-error flag (CMD_S): one event per bad command."""
+    """Out-of-range values set the command-error flag (CMD_S): one event per bad command. TM:
+    "RANGE: 0 <= TM <= 200,000"."""
     h = Harness("PCIX-004")
     h.send("AX;TM300000;")
     errors = h.errors()
-    assert len(errors) == 1 and isinstance(errors[0], CommandErrorEvent)
-    assert errors[0].command == "TM300000"
+    assert errors == [CommandErrorEvent(0.0, ErrorKind.OUT_OF_RANGE, "TM300000")]

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import pytest
 
 from omsd.board.axis import SERVO_CHECK
-from omsd.board.events import ServoTripEvent
+from omsd.board.events import ErrorKind, ServoTripEvent
 from omsd.board.harness import Harness
 from omsd.board.servo import RUNAWAY_ERROR, SERVO_RATE, VOLTS_PER_COUNT
 
@@ -155,7 +155,7 @@ def test_pcix_202_has_servos_on_x_and_y_only() -> None:
     assert ask(h, "AY;?PM") == "hn"
     assert ask(h, "AY;?KP") == "kp25.00"
     h.send("AZ;KP25;\n")
-    assert len(h.errors()) == 1
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.WRONG_MOTOR, "KP25")]
     h.send("AY;MR500;GO;\n")
     h.until(0.5)
     assert rp_re(h) == (500, 500)
@@ -268,29 +268,35 @@ def test_the_same_move_gives_the_same_trace() -> None:
 def test_gain_queries_answer_the_value_set(command: str, reply: str) -> None:
     h = Harness("PCIX-400")
     query = "?" + command[:2]
-    assert ask(h, f"AY;{query}") != reply
+    factory = FACTORY_REPLIES[command[:2]]
+    assert ask(h, f"AY;{query}") == factory
     h.send(f"AY;{command};\n")
     assert h.errors() == []
     assert ask(h, f"AY;{query}") == reply
-    assert ask(h, f"AX;{query}") != reply  # the other axes keep theirs
+    assert ask(h, f"AX;{query}") == factory  # the other axes keep theirs
+
+
+# E104 ``kp10.00``; KI 0.04 and KD 20.00 from their pages; KB 10.0 and KU 200 from the §2.8
+# table (the KB page's "0.00" would leave a servo unable to move, see servo.py)
+FACTORY_REPLIES = {
+    "KP": "kp10.00",
+    "KI": "ki0.04",
+    "KD": "kd20.00",
+    "KV": "kv0.00",
+    "KA": "ka0.00",
+    "KB": "kb10.00",
+    "KF": "kf0",
+    "KU": "ku200",
+    "KO": "ko0",
+}
 
 
 def test_factory_gain_replies() -> None:
-    """E104 ``kp10.00``; KI 0.04 and KD 20.00 from their pages; KB 10.0 and KU 200 from the
-    §2.8 table (the KB page's "0.00" would leave a servo unable to move, see servo.py)."""
+    """The factory gains (FACTORY_REPLIES), on every axis of a PCIX-400."""
     h = Harness("PCIX-400")
-    replies = [ask(h, "AX;?" + m) for m in ("KP", "KI", "KD", "KV", "KA", "KB", "KF", "KU", "KO")]
-    assert replies == [
-        "kp10.00",
-        "ki0.04",
-        "kd20.00",
-        "kv0.00",
-        "ka0.00",
-        "kb10.00",
-        "kf0",
-        "ku200",
-        "ko0",
-    ]
+    for axis in "XYZT":
+        replies = {m: ask(h, f"A{axis};?{m}") for m in FACTORY_REPLIES}
+        assert replies == FACTORY_REPLIES, axis
     assert [ask(h, "AX;?SO"), ask(h, "AX;?SV")] == ["bi", "svn"]  # E187 "svn"
 
 

@@ -390,6 +390,18 @@ def test_zero_distance_or_parameters_give_no_pieces(shape):
     assert pf.move_pieces(100, VL, 0.0, 0.0, shape) == []
 
 
+# Custom tables whose first segment, at a constant fraction f of AC up to a velocity v, covers the
+# first 50 steps of a move: it lasts v^2 / (2 f AC) steps
+FIRST_SEGMENT = {
+    "e38": 0.1,  # 10% AC to 5% VL: 5000^2 / 200,000 = 125 steps
+    "e37": 0.1,  # 10% AC to 20% VL: 20,000^2 / 200,000 = 2000 steps
+    "one-full": 1.0,  # 100% AC to 100% VL: 5000 steps
+    "one-half-accel": 0.5,  # 50% AC to 100% VL: 10,000 steps
+    "ends-low": 0.4,  # 40% AC to 30% VL: 30,000^2 / 800,000 = 1125 steps
+    "decreasing": 1.0,  # 100% AC to 80% VL: 3200 steps
+}
+
+
 @pytest.mark.parametrize("shape", SHAPES.values(), ids=SHAPES.keys())
 def test_trajectory_reaches_the_target_monotonically(shape):
     traj = Trajectory(1.0, 50.0, pf.move_pieces(-123_456, VL, AC, 0.0, shape), final=-123_406)
@@ -400,7 +412,17 @@ def test_trajectory_reaches_the_target_monotonically(shape):
         assert x <= prev + 1e-9
         prev = x
     assert traj.position(traj.end_time) == -123_406
-    assert traj.first_time(0.0, False, 1.0) is not None
+    # the first time the position, 50 at t0 = 1.0, is down to 0: there, and not before
+    t = traj.first_time(0.0, False, 1.0)
+    assert t is not None and 1.0 < t < traj.end_time
+    assert traj.position(t) == pytest.approx(0.0, abs=1e-6)
+    assert traj.position(t - 1e-6) > 0.0
+    name = next(k for k, v in SHAPES.items() if v == shape)
+    if name in FIRST_SEGMENT:
+        # the first segment of the table, "Ramp at f of AC until ... of VL", covers the 50
+        # steps: 0.5 * f * AC * t^2 = 50
+        f = FIRST_SEGMENT[name]
+        assert t == pytest.approx(1.0 + math.sqrt(100.0 / (f * AC)), rel=1e-9)
 
 
 @pytest.mark.parametrize("shape", SHAPES.values(), ids=SHAPES.keys())

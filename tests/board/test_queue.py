@@ -186,9 +186,10 @@ AA: dict[str, T] = {
     "MR5,5,5,5;": flat(2),
     "ML5,5,5,5;": by_ramp(6, 30, 30),
     "MT5,5,5,5;": by_ramp(6, 30, 30),
-    # GO/GD: Table A (by encoder option) + Table B (by ramp), digest §8.3 item 17
-    "GO": ((11, 20, 20), (14, 23, 23)),
-    "GD": ((12, 21, 21), (15, 24, 24)),
+    # GO/GD: Table A (NO ENCODER 5 / 6, ENCODER 8 / 9) + Table B (LINEAR 6, PARABOLIC 15,
+    # COSINE 15) on the encoder version only (PC48 §6.8)
+    "GO": ((5, 5, 5), (8 + 6, 8 + 15, 8 + 15)),
+    "GD": ((6, 6, 6), (9 + 6, 9 + 15, 9 + 15)),
     "ID": flat(1),
     "II": flat(1),
     "IN5,5,5,5;": flat(2),
@@ -210,11 +211,12 @@ AA: dict[str, T] = {
 @pytest.mark.parametrize("model", ["PC48-4", "PC48-4E"])
 @pytest.mark.parametrize("command", list(AA))
 def test_aa_queue_table(model: str, ramp: str, command: str) -> None:
-    """Every axis queue is charged the AA,AM row (GO/GD: Table A plus Table B).
+    """Every axis queue is charged the AA,AM row (GO/GD: Table A, plus Table B on an encoder
+    board).
 
-    GO/GD: the text says "If the board is an encoder version, add the value found in Table B",
-    but Table A already has NO ENCODER/ENCODER columns and Table B is by ramp type (digest
-    §8.3 item 17); design decision: A[encoder] + B[ramp] on every board.
+    GO/GD (PC48 §6.8): "find the appropriate value in Table A. If the board is an encoder
+    version, add the value found in Table B to the value from Table A": a board without
+    encoders is charged Table A's NO ENCODER column only, whatever the ramp.
     """
     h = long_move_aa(model, ramp)
     expected = AA[command][1 if model.endswith("E") else 0][RAMP_INDEX[ramp]]
@@ -270,7 +272,7 @@ def test_pa_and_se_add_to_every_single_axis_go(model: str, go: int, gd: int) -> 
 @pytest.mark.parametrize("model", ["PC48-4", "PC48-4E"])
 def test_pa_and_se_add_to_every_aa_go(model: str) -> None:
     h = long_move_aa(model, "linear")
-    go = 11 if model == "PC48-4" else 14
+    go = 5 if model == "PC48-4" else 14  # Table A 5; encoder: 8 + Table B linear 6
     h.send("PA1,1,1,1;")
     assert cost_of(h, "GO") == [go + 2] * 4
     h.send("SE5,5,5,5;")
@@ -281,7 +283,7 @@ def test_pa_on_some_axes_only_charges_them() -> None:
     """AA PA,0,,1; (E-example of §6.6) affects Y and T only."""
     h = long_move_aa("PC48-4", "linear")
     h.send("PA,0,,1;")
-    assert cost_of(h, "GO") == [11, 13, 11, 13]
+    assert cost_of(h, "GO") == [5, 7, 5, 7]
 
 
 # -- immediate commands ---------------------------------------------------------------------------
@@ -444,9 +446,9 @@ def test_aa_loop_keeps_slots_on_every_axis() -> None:
     h = Harness("PC48-4")
     h.send("AA VL1000,1000,1000,1000; AC1000000,1000000,1000000,1000000;")
     h.send("LS2; MR500,500,500,500; GO LE")
-    assert rq(h) == [200 - 17] * 4
+    assert rq(h) == [200 - 2 - 2 - 5 - 2] * 4  # LS, MR, GO (Table A, no encoder), LE
     h.until(0.75)
-    assert rq(h) == [183] * 4
+    assert rq(h) == [189] * 4
     h.run()
     assert h.query("RQ RP") == value("200,200,200,200") + value("1000,1000,1000,1000")
 

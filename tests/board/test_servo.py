@@ -192,7 +192,7 @@ def cruise_error(
 
 def test_kp_alone_follows_at_velocity_over_gain() -> None:
     """A velocity-mode amplifier needs an error to make speed: v / (KP * counts/s per count)."""
-    g = Plant().velocity_per_volt * servo.VOLTS_PER_COUNT
+    g = 200_000.0 * 10.0 / 32768  # the plant's 200,000 counts/s per volt, 10 V / 32,768 a count
     assert cruise_error(NO_I) == pytest.approx(200_000.0 / (g * NO_I.kp), rel=1e-3)
 
 
@@ -257,7 +257,7 @@ def test_kb_bounds_the_output_voltage() -> None:
         volts.append(loop.dac_volts)
         speeds.append(loop.velocity)
     assert max(volts) == pytest.approx(1.0, abs=servo.VOLTS_PER_COUNT)
-    assert max(speeds) <= Plant().velocity_per_volt * 1.0 + 1e-6
+    assert max(speeds) <= 200_000.0 * 1.0 + 1e-6  # KB1: 1 V at most, 200,000 counts/s per volt
     free = closed_loop()
     free.run(20_000.0, T)
     assert free.dac_volts > 9.9  # KB10 lets the DAC reach full scale
@@ -357,8 +357,8 @@ def test_hf_opens_the_loop_and_outputs_dz_whatever_the_error() -> None:
     loop.closed = False
     loop.run(5000.0, 0.5)
     assert loop.dac_counts == -100
-    drift = Plant().velocity_for(-100 * servo.VOLTS_PER_COUNT)
-    assert loop.velocity == pytest.approx(drift)
+    # DZ-100 alone: -100 counts x 10 V / 32,768 = -30.52 mV, x 200,000 counts/s per volt
+    assert loop.velocity == pytest.approx(-6103.515625)
     assert loop.following_error == pytest.approx(5000.0 - loop.position)
 
 
@@ -375,10 +375,11 @@ def test_dz_zeroes_an_unbalanced_amplifier_in_open_loop() -> None:
 
 def test_open_loop_coasting_follows_the_first_order_lag() -> None:
     """With the output constant the motor speed approaches its target as exp(-t / tau)."""
-    plant = Plant()
     gains = replace(FACTORY, dz=1234.0)
-    target = plant.velocity_for(1234.0 * servo.VOLTS_PER_COUNT)
-    tau = plant.time_constant
+    # DZ1234 alone: 1234 counts x 10 V / 32,768 x 200,000 counts/s per volt, with the plant's
+    # 1.4 ms lag
+    target = 75_317.3828125
+    tau = 0.0014
     one = ServoLoop(gains, position=7.0)
     one.velocity = -50_000.0
     many = ServoLoop(gains, position=7.0)
@@ -402,7 +403,8 @@ def test_an_error_beyond_32768_disables_the_pid() -> None:
     assert loop.dac_counts == 5  # open loop: DZ only
     loop.run(RUNAWAY_ERROR + 1000.0, 0.5)
     assert loop.tripped and loop.dac_counts == 5
-    assert loop.velocity == pytest.approx(Plant().velocity_for(5 * servo.VOLTS_PER_COUNT))
+    # DZ5 alone: 5 counts x 10 V / 32,768 = 1.526 mV, x 200,000 counts/s per volt
+    assert loop.velocity == pytest.approx(305.17578125)
 
 
 def test_an_error_within_the_limit_is_chased() -> None:

@@ -350,7 +350,11 @@ def decode_limits(ql: str, levels: dict[str, str], axes: str) -> dict[str, tuple
 # -- the recording --------------------------------------------------------------------------------
 
 
-@pytest.mark.skipif(not TRACE.exists(), reason="shared/interop is not here")
+@pytest.mark.skipif(
+    not TRACE.exists(),
+    reason=f"{TRACE} is absent: the interop traces are kept in ../shared beside the repository,"
+    " not in a clone of it",
+)
 def test_the_copy_is_the_trace() -> None:
     """RX lines and times as recorded; the capture stub answered exactly the commands counted
     here as queries, one TX each (so the classification matches what the client waited for)."""

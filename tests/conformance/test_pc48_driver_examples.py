@@ -9,7 +9,7 @@ run into the limits, flush, home, move, load positions.
 
 from __future__ import annotations
 
-from omsd.board.events import CommandErrorEvent, DoneEvent, Event, LimitEvent
+from omsd.board.events import CommandErrorEvent, DoneEvent, ErrorKind, Event, LimitEvent
 from omsd.board.harness import Harness
 from omsd.board.world import AxisWorld
 
@@ -23,6 +23,18 @@ COMMAND_FILE = [
     ("ay vl1000 hm0 id", "!"),  # *reduce the speed of the y axis and send it home
     ("aa vl10000,10000; ma30000,30000; go id", "!"),  # *send the platform to its center
     ("ax lp0 ay lp0", None),  # *call the center 0,0
+]
+
+
+# The two jogs into the minus limits, 2000 steps away, at JG 5000 with the power-up AC of
+# 1,000,000: 5 ms of ramp (12.5 steps), then 1987.5 steps at 5000/s, 0.4025 s in all (824.32
+# sample ticks); the pulses stop on the first sample at or past the switch (docs/decisions.md).
+LIMITS = [
+    # X jogs from tick 0: limit on tick 825
+    LimitEvent(825 / 2048, "X", -1),
+    # Y's line is sent at 0.405 s (wait_for's 5 ms steps past X's limit): it starts on tick
+    # ceil(0.405 * 2048) = 830 and meets its limit on tick 830 + 824.32 -> 1655
+    LimitEvent(1655 / 2048, "Y", -1),
 ]
 
 
@@ -49,16 +61,18 @@ def test_x6_command_file_homes_and_centres_the_platform() -> None:
         "Y": AxisWorld(negative_limit=-2000, home_low=0, home_high=100, positive_limit=60_000),
     }
     h = Harness("PC48-2", world=world)
+    limits = iter(LIMITS)
+    done_registers = iter([0b01, 0b10, 0b11])  # X's ID, Y's ID, then the AA ID of both axes
     for line, wait in COMMAND_FILE:
         h.send(line + "\r")
         if line == "ax pl":
             errors = [e for e in h.events() if isinstance(e, CommandErrorEvent)]
-            assert [e.command for e in errors] == ["PL"]
+            assert [(e.kind, e.command) for e in errors] == [(ErrorKind.UNKNOWN_COMMAND, "PL")]
         if wait == "@":
-            limit = wait_for(h, LimitEvent)
-            assert isinstance(limit, LimitEvent) and limit.direction == -1
+            assert wait_for(h, LimitEvent) == next(limits)
         elif wait == "!":
-            assert isinstance(wait_for(h, DoneEvent), DoneEvent)
+            done = wait_for(h, DoneEvent)
+            assert isinstance(done, DoneEvent) and done.done_register == next(done_registers)
             h.send(b"\x19")  # the driver clears the DONE with a Control-Y
     # home loaded 0 at the switch edge; the platform is now 30,000 steps above it
     for letter in "XY":
@@ -73,10 +87,12 @@ def test_x6_limit_flushes_what_was_queued_behind_the_move() -> None:
     for completion of JG will begin when JG is up to its requested velocity".)"""
     h = Harness("PC48-2", world={"X": AxisWorld(negative_limit=-2000)})
     h.send("ax vl5000 mr-10000 go vl1000 hm0 id\r")
-    wait_for(h, LimitEvent)
+    assert wait_for(h, LimitEvent) == LIMITS[0]  # the same ramp and speed as X's jog above
     h.run()
     assert h.board.registers.done == 0
-    assert -2003 <= h.position("X") <= -2000
+    # stopped on tick 825 (0.40283 s): 12.5 + (0.40283 - 0.005) * 5000 = 2001.66 steps on,
+    # 2001 of them whole
+    assert h.position("X") == -2001
     assert h.query("ax rq") == b"\n\r200\n\r"
     assert h.axis("X").vl == 5000
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 
-from omsd.board.events import CommandErrorEvent, LimitEvent, SlipEvent
+from omsd.board.events import ErrorKind, LimitEvent, SlipEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import DON_S, ENC_S, OVRT
 from omsd.board.world import AxisWorld
@@ -1067,9 +1067,8 @@ def test_e106_bh_bl_bit10_at_contour_start_and_end() -> None:
     assert h.board.outputs_low == 1 << 10
     h.events()
     h.send("AA CV2000\r\n CD0,0;\r\n BH10\r\n CR0,10000,6.2831853;\r\n BL10\r\n CE\r\n CK\r\n")
-    errors = h.errors()
-    assert len(errors) == 1
-    assert errors[0].command.strip().upper() == "CK"
+    # CE ended the definition (back to AA); CK: "AA,AM Not valid"
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.NOT_VALID_IN_MODE, "CK")]
     assert h.board.outputs_low == 1 << 10  # nothing runs before CX
     h.send("CX")
     period = 2 * math.pi * 10_000 / 2000
@@ -1222,7 +1221,8 @@ def test_e109_mt_hexagon_verbatim_stray_space() -> None:
     text = "AA CV5000;\r\nCD10000,0;\r\nMT20000,0\r\nMT25000,10000\r\nMT20000,2 0000\r\nBL9\r\n"
     text += "MT10000,20000\r\nMT5000,10000\r\nBH9\r\nMT10000,0\r\nCK\r\nCX\r\n"
     h.send(text)
-    assert len([e for e in h.events() if isinstance(e, CommandErrorEvent)]) == 1
+    # "0" cannot start a command: one error for the bad word "0000"
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.BAD_CHARACTER, "0")]
     path = [(10_000, 0), (20_000, 0), (25_000, 10_000), (20_000, 2), (10_000, 20_000)]
     path += [(5000, 10_000), (10_000, 0)]
     times = path_times(path, 4.0, 5000.0)

@@ -1542,8 +1542,9 @@ def test_e212_wh_drills_squares_until_cw() -> None:
     The commands are typed as printed (the ``*`` comments dropped). ``MA,.5;`` is the second
     field, Y, although its comment speaks of Z: the text typed is what the board gets. Setup:
     UU10000 on X, Y, Z; VL.1 and AC10 (1000 counts/s, 100,000 counts/s²) for homing; HR on each
-    axis finds its home switch (at -1900 counts, approached from above) and loads 0 there, then
-    ramps 5 counts past it (1000² / 2e5). ``VL3,3,.5`` is 30,000, 30,000 and 5000 counts/s.
+    axis finds its home switch (the window ends at -1900 counts, approached from above: the
+    first whole step inside is -1901) and loads 0 there, then ramps 5 counts past it (1000² /
+    2e5). ``VL3,3,.5`` is 30,000, 30,000 and 5000 counts/s.
 
     Each press of the switch runs one pass: X and Y to 3 inches (30,000 counts, cruising at
     30,000 counts/s), Y to 0.5 inch, Z to 0, X and Y back to 0; then the loop waits at SW0
@@ -1560,7 +1561,7 @@ def test_e212_wh_drills_squares_until_cw() -> None:
     assert typed(h, *setup) == b""
     h.run()
     assert [h.position(a) for a in "XYZ"] == [-5, -5, -5]
-    assert all(round(h.axis(a).phys(h.t)) == -1905 for a in "XYZ")
+    assert all(round(h.axis(a).phys(h.t)) == -1906 for a in "XYZ")
     loop = ["AA;", "VL3,3,.5;", "WH;", "SW0;", "MA3,3;", "GO;", "MA,.5;", "GO;", "MA,,0;", "GO;"]
     assert typed(h, *loop, "MA0,0;", "GO;", "WG;") == b""
     h.advance(1.0)

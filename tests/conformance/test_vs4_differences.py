@@ -523,7 +523,8 @@ def test_absent_commands_are_command_errors(model: str, mnemonic: str) -> None:
     assert h.send(f"AX {mnemonic} ") == b""
     assert errors(h) == [(ErrorKind.UNKNOWN_COMMAND, mnemonic)]
     assert b.read_status_register(h.t) & CMD_S
-    assert h.send("WY").startswith(b"\n\rVS4-0")
+    # "Response: <LF><CR>VS4-040 ver 1.00 S/N 123456<LF><CR>"
+    assert h.send("WY") == frame(f"{model} ver 1.00 S/N 123456")
     pc48 = Harness("PC48-8")
     pc48.send(f"AX {mnemonic} ")
     pc48.run()

@@ -22,7 +22,7 @@ from functools import partial
 
 import pytest
 
-from omsd.board.events import LimitEvent
+from omsd.board.events import ErrorKind, LimitEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import CMD_S, DON_S, INIT, OVRT
 from omsd.board.world import AxisWorld
@@ -201,10 +201,8 @@ def test_e07_en_turns_echo_on() -> None:
     assert h.send("EN") == b""
     assert h.query("RP") == b"RP" + value("0")
     assert h.query("AY RP") == b"AY RP" + value("0")
-    reply = h.send("XQ ")
-    assert reply.startswith(b"XQ\n\r")
-    assert reply.endswith(b": XQ\n\r ")
-    assert len(h.errors()) == 1
+    assert h.send("XQ ") == b"XQ" + value("Unrecognized command: XQ") + b" "
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.UNKNOWN_COMMAND, "XQ")]
 
 
 def test_e07_en_is_not_valid_in_aa_mode() -> None:
@@ -213,7 +211,7 @@ def test_e07_en_is_not_valid_in_aa_mode() -> None:
     echo stays off."""
     h = Harness("VS4-040")
     h.send("AA EN")
-    assert len(h.errors()) == 1
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.NOT_VALID_IN_MODE, "EN")]
     assert h.board.read_status_register(h.t) & CMD_S
     assert h.query("RP") == value("0,0,0,0")
 
@@ -228,7 +226,7 @@ def test_e08_ef_turns_echo_off() -> None:
     assert h.send("EF") == b"EF"
     assert h.query("RP") == value("0")
     assert h.send("XQ ") == b""
-    assert len(h.errors()) == 1
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.UNKNOWN_COMMAND, "XQ")]
     assert h.board.read_status_register(h.t) & CMD_S
 
 
@@ -254,12 +252,13 @@ def test_e09_hh_hm0_then_hl_hr0_two_pass_home() -> None:
     rp = number(h.query("RP"))
     assert 65 <= rp <= 76, rp  # about 100 - 1000 * (2.55 - 2.521)
     h.run()
-    # HR0 loads 0 at the first tick after crossing 50100 going down (at most 1000/1024 step past
-    # it), then stops in 0.25 step: the counter reads 0 or -1 and counter 0 is at the edge.
+    # HR0 loads 0 at the first tick at which the carriage is on the first whole step inside the
+    # window going down, 50099 (at most 1000/1024 step past it), then stops in 0.25 step: the
+    # counter reads 0 or -1 and counter 0 is within a step below that edge.
     assert h.query("RV") == value("0")
     assert h.query("RP") in (value("0"), value("-1"))
     offset = physical(h, "X") - h.position("X")
-    assert 50_099.0 <= offset <= 50_100.0, offset
+    assert 50_098.0 <= offset <= 50_099.0, offset
     assert h.axis("X").home_high is False  # HL restored
     assert h.query("RQ") == value("800")
 
@@ -849,7 +848,7 @@ def test_e41_mo_is_not_available_with_encoders() -> None:
     h = Harness("VS4-040")
     h.send("AZ MM MO")
     h.run()
-    assert len(h.errors()) == 1
+    assert [(e.kind, e.command) for e in h.errors()] == [(ErrorKind.ENCODER_MODEL, "MO")]
     assert h.query("RP") == value("0")
     assert physical(h, "Z") == 0.0
 

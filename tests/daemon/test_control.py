@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import random
 import socket
 import stat
 import threading
@@ -32,7 +33,6 @@ from omsd.board.events import DoneEvent
 from omsd.board.harness import Harness
 from omsd.control.client import Control
 from omsd.control.protocol import MAX_LINE, ControlError
-from omsd.faults import Faults
 
 from .process import POLL, TIMEOUT, Conn, Daemon, Omsd, run_omsd, wait_for
 
@@ -393,21 +393,42 @@ def test_drop_one_loses_everything_both_ways(bench: Callable[..., Bench]) -> Non
     assert c.ask(b"WY") == WY
 
 
+def noisy_cable(data: bytes, garble: float, dice: random.Random) -> bytes:
+    """What omsd/faults.py says a cable with garbles (and no drops) does, worked out here with
+    the seeded dice themselves rather than with omsd's ``Faults``: for each character one draw
+    decides a drop (never, at probability 0), one a garble, and a garbled character has one
+    bit, drawn from 0 to 7, flipped."""
+    out = bytearray()
+    for b in data:
+        dice.random()  # the drop draw: never below a drop probability of 0
+        if dice.random() < garble:
+            b ^= 1 << dice.randrange(8)
+        out.append(b)
+    return bytes(out)
+
+
 def test_garble_is_seeded_the_same_damage_twice(bench: Callable[..., Bench]) -> None:
     """The dice are seeded: the same bytes get the same damage, on the way in (the board hears
     the damaged command) and on the way back (the reply to it is damaged in turn)."""
     b = bench()
     c = b.connect()
     command = b"WY WY WY WY WY WY"
-    dice = Faults(garble=0.05, seed=7)
-    heard = dice.damage(command)
-    assert heard == b"WY WY WY W] WY WY"  # one bit of one byte flipped on the way in
-    # what the board answers to that, on a clean cable
+    dice = random.Random(7)  # seed 7, one stream for both directions, inbound first
+    heard = noisy_cable(command, 0.05, dice)
+    assert heard == b"WY WY WY W] WY WY"  # 'Y' (0x59) with bit 2 flipped is ']' (0x5D)
+    # what the board answers to that, on a clean cable: W] is not a command
     c.send(heard)
     answer = (WY + b"\n") * 3 + b"#\n" + (WY + b"\n") * 2
     c.expect(answer)
-    expected = dice.damage(answer)  # and the way back
-    assert expected != answer
+    # and the way back: four characters each with one bit flipped, none lost
+    expected = noisy_cable(answer, 0.05, dice)
+    assert expected == (
+        b"PC48 ver 3,00-4\n"  # '.' 0x2E ^ 0x02 = ',' 0x2C
+        + (WY + b"\n") * 2
+        + b"#\n"
+        + b"PC48 ver 3>00-4\n"  # '.' 0x2E ^ 0x10 = '>' 0x3E
+        + b"PC48 fer 3.00\r4\n"  # 'v' 0x76 ^ 0x10 = 'f' 0x66, '-' 0x2D ^ 0x20 = CR 0x0D
+    )
     for _ in range(2):
         b.ctl.reset()  # the same interpreter state (no half command left) each time
         b.ctl.fault(garble=0.05, seed=7)
@@ -623,7 +644,13 @@ def test_state_shows_registers_queue_space_and_the_link_buffers(
     for key in ("position", "encoder", "velocity", "moving", "done", "limit_positive", "home"):
         assert key in state["axes"]["X"]
     assert (state["done_register"], state["control"], state["io_low"]) == (0, 0, 0)
-    assert state["link"] == {"kind": "driver", "room": 256, "pending": 0, "waiting": None}
+    assert state["link"] == {
+        "kind": "driver",
+        "room": 256,
+        "pending": 0,
+        "waiting": None,
+        "held": None,
+    }
     assert state["faults"]["cable"] is True and state["clients"] == []
     empty = state["axes"]["X"]["queue_free"]
 

@@ -120,7 +120,11 @@ def recorded_rx() -> list[tuple[float, bytes, list[bytes]]]:
     return out
 
 
-@pytest.mark.skipif(not TRACE.exists(), reason="shared/interop is not here")
+@pytest.mark.skipif(
+    not TRACE.exists(),
+    reason=f"{TRACE} is absent: the interop traces are kept in ../shared beside the repository,"
+    " not in a clone of it",
+)
 def test_the_copy_is_the_trace() -> None:
     recorded = recorded_rx()
     assert [data for _, data, _ in recorded] == [data for _, data, _ in RX]

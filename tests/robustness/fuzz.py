@@ -103,11 +103,26 @@ class SpyBoard(Board):
         return out
 
 
+def wy_text(model: Model) -> str:
+    """WY's text, from the manuals' examples rather than the model's own format string."""
+    if model.family == "PC48":
+        return f"PC48 ver 3.00-{len(model.axes)}"  # PC48 §6.13: "PC48 ver 3.00-2"
+    if model.family == "PC46":
+        # the datasheet: "returns the model and firmware revision", no example: the PC48's form
+        # (omsd/models/pc46.py)
+        return f"PC46 ver 1.00-{len(model.axes)}"
+    if model.family == "VS4":
+        return f"{model.name} ver 1.00 S/N 123456"  # VS4 WY: "VS4-040 ver 1.00 S/N 123456"
+    # the PCIx WY page: "PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems"
+    assert model.family == "PCIX", model.family
+    return f"{model.name} ver:1.26, s/n:000217 - Oregon Micro Systems"
+
+
 def who_are_you(model: Model, kind: str, eos: bytes = b"\n") -> bytes:
     """The whole answer to WY as a host sees it on ``kind``: ``<LF><CR>text<LF><CR>`` on a PC48,
     PC46 or VS4 (PC48 §6.1: "surrounded by line feeds and carriage returns"), ``text<LF><CR>``
     on a PCIx; through the driver, the text and the end character (§7.3.2)."""
-    text = model.who_are_you().encode("ascii")
+    text = wy_text(model).encode("ascii")
     if kind == "driver":
         return text + eos
     if model.framing == "trailing":

@@ -23,7 +23,6 @@ import select
 import signal
 import socket
 import struct
-import termios
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -49,13 +48,16 @@ VELOCITY = 20_000
 class PtyClient:
     """The pty opened as a serial port is by a legacy program, every read bounded."""
 
+    closed = 0  # closes by every PtyClient so far (the daemon logs a line for each)
+
     def __init__(self, path: Path) -> None:
+        # no flush here: what earlier clients left unread in the terminal must not be there
+        # (the daemon flushes it once it has seen the last client close the pty)
         self.fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
-        # what earlier clients left unread in the terminal is not this client's
-        termios.tcflush(self.fd, termios.TCIFLUSH)
 
     def close(self) -> None:
         os.close(self.fd)
+        PtyClient.closed += 1
 
     def send(self, data: bytes) -> None:
         view = memoryview(data)
@@ -71,7 +73,10 @@ class PtyClient:
             left = deadline - time.monotonic()
             assert left > 0, f"{command!r}: no reply within {TIMEOUT} s, got {bytes(reply)!r}"
             if select.select([self.fd], [], [], left)[0]:
-                reply += os.read(self.fd, 256)
+                try:
+                    reply += os.read(self.fd, 256)
+                except BlockingIOError:  # flushed between the select and the read
+                    continue
         return bytes(reply[:-1])
 
 
@@ -104,7 +109,8 @@ def tcp_cycle(address: tuple[str, int], i: int) -> int:
     return stale
 
 
-def pty_cycle(path: Path, i: int) -> None:
+def pty_cycle(path: Path, i: int, closes: Callable[[], int]) -> None:
+    """One open, use and close; ``closes()`` is how many closes the daemon has seen."""
     client = PtyClient(path)
     try:
         kind = i % 3
@@ -112,12 +118,16 @@ def pty_cycle(path: Path, i: int) -> None:
             reply = client.ask(b"AY RP")
             assert reply == b"-777", f"cycle {i}: {reply!r}"
         elif kind == 2:
-            # leave the answer unread in the terminal (once it is there: the next client
-            # flushes what it finds when it opens, and must not get this one late)
+            # leave the answer unread in the terminal (once it is there): the next client must
+            # not find it there, once the daemon has seen this one go (a program that opens the
+            # pty again faster than that can: omsd/transport/pty.py)
             client.send(b"AY RP")
             assert select.select([client.fd], [], [], TIMEOUT)[0], f"cycle {i}: no answer"
     finally:
         client.close()
+    if kind == 2:
+        made = PtyClient.closed
+        assert wait_for(lambda: closes() >= made), f"cycle {i}: {closes()} of {made} closes seen"
 
 
 def start_long_move(ask: Callable[[bytes], bytes], seconds: float) -> int:
@@ -194,7 +204,8 @@ def test_tcp_connect_disconnect_churn(omsd: Omsd, scale: Scale) -> None:
 def test_pty_open_close_churn(omsd: Omsd, scale: Scale, tmp_path: Path) -> None:
     cycles = scale(*PTY_CYCLES)
     link = tmp_path / "board1"
-    daemon = omsd("--pty", str(link), "--control", "off", "--view", "off")
+    # the plain view, for the "closed" lines that say the daemon has seen a client go
+    daemon = omsd("--pty", str(link), "--control", "off", "--view", "plain")
     pid = daemon.proc.pid
     fds_idle = fd_count(pid)
 
@@ -205,15 +216,20 @@ def test_pty_open_close_churn(omsd: Omsd, scale: Scale, tmp_path: Path) -> None:
         finally:
             client.close()
 
+    PtyClient.closed = 0
+
+    def closes() -> int:
+        return daemon.stderr.count(" closed\n")
+
     assert ask(b"AY LP-777 RP") == b"-777"
     started = time.monotonic()
     for i in range(WARM_UP):
-        pty_cycle(link, i)
+        pty_cycle(link, i, closes)
     per_cycle = (time.monotonic() - started) / WARM_UP
     rss_before = rss_kib(pid)
     target = start_long_move(ask, 3 * per_cycle * cycles + 2.0)
     for i in range(cycles):
-        pty_cycle(link, i)
+        pty_cycle(link, i, closes)
     check_after(
         daemon,
         pid,
@@ -229,10 +245,9 @@ def test_pty_open_close_churn(omsd: Omsd, scale: Scale, tmp_path: Path) -> None:
 def test_answers_to_a_vanished_client_do_not_go_to_the_next_one(omsd: Omsd) -> None:
     """A client asks ``AY RP`` and hangs up; a new client connects before the daemon has read
     the question (made certain, as in ``tests/daemon/test_tcp.py``, by pausing the daemon with
-    SIGSTOP). The question still reaches the board ("what a client wrote before it vanished is
-    still passed on in order", ``omsd/service.py``), but its answer is not the new client's:
-    "What the board says goes to the client that last wrote to it" (ibid.), and the new client
-    has not written yet. Given the stale ``-777`` the new client takes it for the answer to its
+    SIGSTOP). The question still reaches the board (``TcpClient.hand_over``: bytes already
+    sent), but its answer is not the new client's: it belongs to the session that asked
+    (``omsd/service.py``). Given the stale ``-777`` the new client takes it for the answer to its
     own ``AX RP`` and is one reply out of step from then on; whether that happens depends only
     on when the daemon got round to reading the first client (churn shows it at once)."""
     daemon = omsd("--tcp", "127.0.0.1:0", "--control", "off", "--view", "off")
