@@ -382,3 +382,22 @@ def test_nc_with_n_gets_the_done_marker(setup: Callable[..., Setup]) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout == b"!\x01\n"
+
+
+def test_a_macro_left_open_on_a_pcix_raw_link_does_not_swallow_the_next_client(
+    omsd: Omsd,
+) -> None:
+    """Issue 13: "on a PCIx raw link the next client got no answer at all within a second"
+    (after fuzzing: an ``MD`` macro definition left open takes every later character, PCIx MD:
+    "then enter a control Z to end the macro definition"). What the last client left
+    half-entered is abandoned when another starts writing (docs/decisions.md, "Sessions")."""
+    daemon = omsd("--board", "PCIX-400", "--link", "raw", "--tcp", "127.0.0.1:0")
+    a = TcpClient(*daemon.tcp())
+    a.send(b"MD1;AX;MR1000;GO;")
+    a.leave()
+    with Conn(*daemon.tcp()) as b:
+        b.send(b"WY;")
+        b.expect(b"PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems\n\r")
+        b.send(b"PM1;WY;")  # the macro keeps its old text: none, and PM prints nothing
+        b.expect(b"PCIX-400 ver:1.26, s/n:000217 - Oregon Micro Systems\n\r")
+        assert b.quiet(0.2) == b""
