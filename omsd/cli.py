@@ -1,27 +1,37 @@
 """The ``omsd`` command line.
 
 ``omsd`` alone serves the built-in default (one PC48-4E on TCP 127.0.0.1:7048 and on a pty);
-``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file; ``--config FILE``
-describes several. ``--state FILE`` keeps the boards' flash memory (AP defaults, permanent
-macros) across restarts, with either form. ``omsd models`` lists the personalities; ``omsd
-console`` talks to one board on this terminal without serving it; ``omsd ctl`` reaches behind
-the boards of a running daemon (:mod:`omsd.ctl`, which has its own options and exit statuses).
+``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file (``--tcp`` or
+``--pty`` given replaces both defaults: ``--tcp`` alone serves no pty, and the daemon says so in
+its log); ``--config FILE`` describes several. ``--state FILE`` keeps the boards' flash memory
+(AP defaults, permanent macros) across restarts, with either form. ``omsd models`` lists the
+personalities; ``omsd commands MODEL`` the commands one understands (:mod:`omsd.commands`);
+``omsd console`` talks to one board on this terminal without serving it, or runs a command
+file through it (:mod:`omsd.console`); ``omsd ctl`` reaches behind the boards of a running
+daemon (:mod:`omsd.ctl`, which has its own options and exit statuses).
 
-Exit status: 0 after a clean stop, 2 for a configuration error or a place the daemon refuses to
-use (a runtime directory another user could change, a file at a pty link's path that is not
-omsd's: :mod:`omsd.files`), 1 when the daemon cannot start (a port in use, a pty link that
-cannot be made). Errors are one line on standard error.
+Every help text shows each option's default and a few examples (issue 14).
+
+Exit status: 0 after a clean stop, 2 for anything that keeps the daemon from starting, each one
+line on standard error naming what and why, with nothing left behind: a configuration error, a
+place the daemon refuses to use (a runtime directory another user could change, a file at a pty
+link's path that is not omsd's: :mod:`omsd.files`), or one it cannot use (a port in use, a log
+or state file that cannot be opened, a pty link whose directory is missing). A restart cannot
+fix any of them, and systemd's ``RestartPreventExitStatus=2`` stops there. 130 after Ctrl-C
+during start-up.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import os
 import sys
 
 from omsd import __version__
 from omsd.config import (
     DEFAULT_MODEL,
+    DEFAULT_TCP_PORT,
     VIEWS,
     ConfigError,
     from_options,
@@ -29,61 +39,186 @@ from omsd.config import (
     with_control_option,
     with_state_option,
 )
+from omsd.console import DEFAULT_WAIT as DEFAULT_CONSOLE_WAIT
+from omsd.helptext import HelpFormatter, examples
 from omsd.link import KINDS
 from omsd.models import MODELS, UnknownModel, get_model
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(2, f"omsd: {message}\n")
+        self.exit(2, f"{self.prog}: {message}\n")
 
 
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="omsd",
-        description="Virtual Oregon Micro Systems motion controllers, served over pty and TCP.",
+        usage="omsd [--config FILE | --board MODEL --tcp [HOST:]PORT ...] [OPTIONS]\n"
+        "       omsd {models,commands,console,ctl} ...",
+        description="Virtual Oregon Micro Systems motion controllers (PC48, PC46, VS4,\n"
+        "PCIx), served over pty and TCP. With no COMMAND, serve the boards until\n"
+        "Ctrl-C or SIGTERM: one line per endpoint on standard output (board, model,\n"
+        "link, kind, address), the traffic on standard error.",
+        epilog=examples(
+            ("omsd", "a PC48-4E on 127.0.0.1:7048 and a pty"),
+            ("omsd --board PCIX-400 --tcp 0", "a PCIx on a free port, no pty"),
+            ("omsd --config config/omsd.toml", "the boards of a file"),
+        )
+        + "\n\nexit status: 0 stopped; 2 not started (a configuration error, a port in\n"
+        "use, a file or directory that cannot be used: one line on standard error);\n"
+        "130 interrupted.",
+        formatter_class=HelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"omsd {__version__}")
-    p.add_argument("--config", metavar="FILE", help="TOML file describing the boards")
     p.add_argument(
-        "--board", metavar="MODEL", help=f"model of the one board (default {DEFAULT_MODEL})"
+        "--config",
+        metavar="FILE",
+        help="TOML file describing the boards (default: none, one board from the options below;"
+        " config/omsd.toml explains every key)",
+    )
+    p.add_argument(
+        "--board",
+        metavar="MODEL",
+        help=f"model of the one board (default: {DEFAULT_MODEL}; omsd models lists them)",
     )
     p.add_argument(
         "--tcp",
         metavar="[HOST:]PORT",
         action="append",
         default=[],
-        help="serve on TCP (repeatable; PORT 0 picks a free port)",
+        help="serve on TCP; repeatable; PORT 0 picks a free port (default: 127.0.0.1:"
+        f"{DEFAULT_TCP_PORT}, with the default pty). Given without --pty, it replaces the"
+        " defaults: no pty",
     )
     p.add_argument(
         "--pty",
         metavar="PATH",
         action="append",
         default=[],
-        help="serve on a pty with a symlink at PATH (repeatable)",
+        help="serve on a pty with a symlink at PATH; repeatable (default:"
+        " $XDG_RUNTIME_DIR/omsd/board1, with the default TCP port). Given without --tcp: no TCP",
     )
-    p.add_argument("--link", choices=KINDS, help="driver (DOS driver conventions, default) or raw")
-    p.add_argument("--eos", metavar="HEX", help="driver end-of-string character, like E:XX (0A)")
-    p.add_argument("--log", metavar="FILE", help="append the traffic to FILE as JSON lines")
-    p.add_argument("--view", choices=VIEWS, help="traffic on standard error (default auto)")
+    p.add_argument(
+        "--link",
+        choices=KINDS,
+        help="driver: the DOS driver's conventions (markers # @ $ !, end character); raw: the"
+        " board's own stream (default: driver)",
+    )
+    p.add_argument(
+        "--eos",
+        metavar="HEX",
+        help="the driver link's end-of-string character, like the driver's E:XX (default: 0A)",
+    )
+    p.add_argument(
+        "--terminal",
+        action="store_true",
+        help="the ptys are for picocom, minicom or screen: show what is typed, CR LF line ends",
+    )
+    p.add_argument(
+        "--log",
+        metavar="FILE",
+        help="append the traffic and events to FILE as JSON lines (default: none, or [log] file)",
+    )
+    p.add_argument(
+        "--view",
+        choices=VIEWS,
+        help="the traffic on standard error (default: auto: rich on a terminal, else plain)",
+    )
     p.add_argument(
         "--control",
         metavar="PATH",
-        help="the control socket (default $XDG_RUNTIME_DIR/omsd/control.sock; off: none)",
+        help="the control socket for omsd ctl, or off (default: $XDG_RUNTIME_DIR/omsd/"
+        "control.sock; $RUNTIME_DIRECTORY/control.sock under systemd)",
     )
     p.add_argument(
         "--state",
         metavar="FILE",
-        help="keep the boards' flash (AP defaults, macros 5-24) in FILE across restarts",
+        help="keep the boards' flash (AP defaults, macros 5-24) in FILE across restarts"
+        " (default: none, flash lasts as long as the daemon)",
     )
-    sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    sub.add_parser("models", help="list the board personalities")
-    console = sub.add_parser("console", help="talk to one board on this terminal")
-    console.add_argument("--board", dest="console_board", default=DEFAULT_MODEL, metavar="MODEL")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands", prog="omsd")
+    sub.add_parser(
+        "models",
+        help="list the board personalities",
+        description="List the board personalities: model name and what is fitted.",
+        epilog=examples(
+            ("omsd models", "PC48-2 ... PCIX-400, one a line"),
+            ("omsd models | grep PCIX", "the PCIx models"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    commands = sub.add_parser(
+        "commands",
+        help="list the commands a model understands, with operands, ranges and manual pages",
+        description="List the commands MODEL understands, one a line: the mnemonic, its\n"
+        "operand form (# a number, [#] one that may be left out, #,#,…; one per axis\n"
+        "in AA/AM), the range of each operand, the manual's section and page, and\n"
+        "what it does (the manual's command summary; where it applies in brackets).",
+        epilog=examples(
+            (f"omsd commands {DEFAULT_MODEL}", "every command of the default board"),
+            ("omsd commands PCIX-400 --grep home", "the homing commands of a PCIx"),
+            ("omsd commands VS4-040 --grep VL", "VL and the commands that mention it"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    commands.add_argument(
+        "model",
+        metavar="MODEL",
+        nargs="?",
+        default=DEFAULT_MODEL,
+        help=f"a model of omsd models, case-insensitive (default: {DEFAULT_MODEL})",
+    )
+    commands.add_argument(
+        "--grep",
+        metavar="TEXT",
+        help="only the commands whose mnemonic or description contains TEXT, whatever the case"
+        " (default: all)",
+    )
+    console = sub.add_parser(
+        "console",
+        help="talk to one board on this terminal, or run a command file through it",
+        description="Talk to one board without serving it: what you type goes to the board\n"
+        "(its own stream, no driver link), its replies come back, and its events\n"
+        "(done, limit, slip, command error) are shown in brackets on standard error.\n"
+        "With standard input a file or a pipe, every command in it is sent, the\n"
+        "replies are printed, and it exits 0 at the end of the input once the board\n"
+        "has taken everything and its axes are at rest (at most --wait seconds).",
+        epilog=examples(
+            ("omsd console", "type WY, Enter: PC48 ver 3.00-4"),
+            ("omsd console --board PCIX-400 < cmds.txt", "run a command file"),
+            ("printf 'MR1000 GO ID RP\\n' | omsd console", "[done X], 1000"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    console.add_argument(
+        "--board",
+        dest="console_board",
+        default=DEFAULT_MODEL,
+        metavar="MODEL",
+        help="the board's model",
+    )
+    console.add_argument(
+        "--wait",
+        type=_seconds,
+        default=DEFAULT_CONSOLE_WAIT,
+        metavar="S",
+        help="at the end of a file or pipe, how long motion still running may take"
+        f" (default: {DEFAULT_CONSOLE_WAIT:g} s)",
+    )
     # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
     ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
     ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
     return p
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds, got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected seconds 0 or more, got {text!r}")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -100,6 +235,8 @@ def main(argv: list[str] | None = None) -> int:
         for model in MODELS.values():
             print(f"{model.name:<10} {model.description}")
         return 0
+    if args.command == "commands":
+        return _commands(args.model, args.grep)
     if args.command == "console":
         try:
             model = get_model(args.console_board)
@@ -108,8 +245,33 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         from omsd.console import main as console_main
 
-        return console_main(model)
+        return console_main(model, args.wait)
     return _serve(args)
+
+
+def _commands(name: str, grep: str | None) -> int:
+    """``omsd commands MODEL [--grep TEXT]``: 0, or 1 when nothing matches (as grep), 2 for an
+    unknown model."""
+    from omsd.commands import format_listing, listing
+
+    try:
+        model = get_model(name)
+    except UnknownModel as exc:
+        print(f"omsd commands: {exc}", file=sys.stderr)
+        return 2
+    listed = listing(model)
+    if grep is not None:
+        listed = [c for c in listed if c.matches(grep)]
+        if not listed:
+            print(f"omsd commands: no {model.name} command matches {grep!r}", file=sys.stderr)
+            return 1
+    try:
+        for line in format_listing(listed):
+            print(line)
+        sys.stdout.flush()
+    except BrokenPipeError:  # omsd commands PC48-4E | head
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 0
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -118,12 +280,16 @@ def _serve(args: argparse.Namespace) -> int:
 
     try:
         if args.config:
-            single = [o for o in ("board", "tcp", "pty", "link", "eos") if getattr(args, o)]
+            single = [
+                o for o in ("board", "tcp", "pty", "link", "eos", "terminal") if getattr(args, o)
+            ]
             if single:
                 raise ConfigError(f"--{single[0]}", None, "cannot be combined with --config")
             config = load_config(args.config)
         else:
-            config = from_options(args.board, args.tcp, args.pty, args.link, args.eos, None)
+            config = from_options(
+                args.board, args.tcp, args.pty, args.link, args.eos, None, args.terminal
+            )
         config = with_state_option(config, args.state)
         config = with_control_option(config, args.control)
     except ConfigError as exc:
@@ -133,9 +299,9 @@ def _serve(args: argparse.Namespace) -> int:
     view = args.view or config.log.view
     try:
         log = TrafficLog(view=view, file=log_file, group=config.log.group)
-    except OSError as exc:
+    except OSError as exc:  # TrafficLogError: "cannot open traffic log PATH: REASON"
         print(f"omsd: {exc}", file=sys.stderr)
-        return 1
+        return 2
     try:
         asyncio.run(Daemon(config, log).run())
     except StartupError as exc:

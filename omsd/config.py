@@ -23,8 +23,9 @@ world (``config/omsd.toml`` shows and explains every key)::
     link = "driver"            # driver | raw
     eos = "0A"                 # the driver's E:XX, hex string, or an integer character code
     buffer = 256               # the driver's B:XXXX, integer, or hex string "0100"
-    tcp = ["127.0.0.1:7001"]   # "[HOST:]PORT" or PORT, or a list of them
-    pty = "/run/omsd/xy"       # path, true (the default link), {link, group, mode}, or a list
+    tcp = ["127.0.0.1:7001"]   # "[HOST:]PORT" or PORT, {address, terminal}, or a list of them
+    pty = "/run/omsd/xy"       # path, true (the default link), {link, group, mode, terminal},
+                               # or a list
     second_client = "takeover" # takeover | refuse
     linger = 60                # seconds a TCP client that shut down its sending side is kept
                                # for the answers to what it sent (0: closed at once)
@@ -47,9 +48,13 @@ so a string is read as hexadecimal, as the driver reads it (``eos = "0D"``), and
 the value itself (``eos = 13`` or ``eos = 0x0D``). Both options shape the driver link only: on a
 ``raw`` link, which keeps the board's own LF/CR framing, they are an error.
 
-Every error is a :class:`ConfigError` whose text is one line, ``<file>: <key path>: expected
-<what>, got <value>`` (``omsd.toml: board[0].axes.U: PC48-4E has axes X, Y, Z, T``), or for a
-command-line option ``--tcp: expected [HOST:]PORT with PORT 0..65535, got 'abc'``.
+Every error is a :class:`ConfigError` whose text is one line, ``<file>:<line>: <key path>:
+expected <what>, got <value>`` (``omsd.toml:14: [board "xy"] axes.X.positive_limit: expected a
+number (motor steps), got "5k"``), or for a command-line option ``--tcp: expected [HOST:]PORT
+with PORT 0..65535, got "abc"``. A board is named by its name, one without a name by the name it
+is given (``[board "board2" (unnamed)]``); the line is found in the file's text and left out
+when it cannot be (:mod:`omsd.config_errors`, which formats and locates, and knows nothing of
+the keys here).
 
 Choices where the issue is silent:
 
@@ -76,11 +81,9 @@ from __future__ import annotations
 import difflib
 import grp
 import ipaddress
-import json
 import math
 import os
 import re
-import reprlib
 import tomllib
 import typing
 from collections.abc import Iterable, Mapping, Sequence
@@ -89,6 +92,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from omsd.board.world import AxisWorld, LimitWiring, SwitchType
+from omsd.config_errors import ConfigError, KeyPath, board_label, key_text, show
 from omsd.models import MODELS, UnknownModel, get_model, variant
 from omsd.models.spec import Model
 
@@ -122,6 +126,7 @@ class TcpEndpoint:
 
     host: str = DEFAULT_HOST
     port: int = DEFAULT_TCP_PORT
+    terminal: bool = False  # for a person at a terminal program (omsd.transport.terminal)
 
     def __str__(self) -> str:
         host = f"[{self.host}]" if ":" in self.host else self.host
@@ -135,6 +140,7 @@ class PtyEndpoint:
     link: Path
     group: str | None = None  # group to chown the pty device to; None: leave it
     mode: int = DEFAULT_PTY_MODE  # permissions of the pty device
+    terminal: bool = False  # for a person at a terminal program (omsd.transport.terminal)
 
     def __str__(self) -> str:
         return str(self.link)
@@ -210,6 +216,7 @@ class ControlConfig:
     socket: Path | None = field(default_factory=lambda: default_pty_link("control.sock"))
     explicit: bool = False
     tcp: TcpEndpoint | None = None
+    group: str | None = None  # the socket is 0660 in this group; None: 0600
 
 
 @dataclass(frozen=True)
@@ -233,21 +240,6 @@ class MqttConfig:
     keepalive: int = 60
     state_rate: float = 10.0
     traffic: bool = True
-
-
-class ConfigError(Exception):
-    """A configuration that cannot be served. ``str()`` is one line: where, then what."""
-
-    def __init__(self, source: str, key: str | None, detail: str) -> None:
-        super().__init__(source, key, detail)
-        self.source = source  # the file path, or the command-line option
-        self.key = key  # the key path inside the file, e.g. "board[0].axes.X.home_low"
-        self.detail = detail
-
-    def __str__(self) -> str:
-        parts = [self.source] if self.key is None else [self.source, self.key]
-        text = ": ".join([*parts, self.detail])
-        return text.replace("\r", "\\r").replace("\n", "\\n")
 
 
 # -- defaults -----------------------------------------------------------------------------------
@@ -289,36 +281,41 @@ def default_config() -> DaemonConfig:
 
 # -- where a value came from --------------------------------------------------------------------
 
-_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
-_repr = reprlib.Repr()
-_repr.maxstring = 60
-_repr.maxother = 60
-_repr.maxlist = _repr.maxdict = 4
-
-
-def _show(value: object) -> str:
-    return _repr.repr(value)
-
 
 @dataclass(frozen=True)
 class _At:
-    """A place in the configuration: a file (or an option) and a key path inside it."""
+    """A place in the configuration: a file (or an option), a key path inside it, and the labels
+    that name some of its tables in messages (``("board", 0)`` → ``[board "xy"]``)."""
 
     source: str
-    path: str = ""
+    path: KeyPath = ()
+    labels: Mapping[KeyPath, str] = field(default_factory=dict, compare=False, hash=False)
 
     def key(self, name: str) -> _At:
-        shown = name if _BARE_KEY.fullmatch(name) else json.dumps(name)
-        return _At(self.source, f"{self.path}.{shown}" if self.path else shown)
+        return _At(self.source, (*self.path, name), self.labels)
 
     def index(self, i: int) -> _At:
-        return _At(self.source, f"{self.path}[{i}]")
+        return _At(self.source, (*self.path, i), self.labels)
 
-    def error(self, detail: str) -> ConfigError:
-        return ConfigError(self.source, self.path or None, detail)
+    def labelled(self, label: str) -> _At:
+        return _At(self.source, self.path, {**self.labels, self.path: label})
+
+    @property
+    def shown(self) -> str | None:
+        return key_text(self.path, self.labels)
+
+    def error(self, detail: str, also: _At | None = None) -> ConfigError:
+        return ConfigError(
+            self.source,
+            self.shown,
+            detail,
+            path=self.path,
+            also=None if also is None else also.shown or also.source,
+            also_path=None if also is None else also.path,
+        )
 
     def expected(self, what: str, got: object) -> ConfigError:
-        return self.error(f"expected {what}, got {_show(got)}")
+        return self.error(f"expected {what}, got {show(got)}")
 
 
 # -- values -------------------------------------------------------------------------------------
@@ -345,7 +342,7 @@ def _string(value: object, at: _At) -> str:
 def _choice(value: object, choices: Sequence[str], at: _At) -> str:
     if isinstance(value, str) and value.lower() in choices:
         return value.lower()
-    raise at.expected(" or ".join(repr(c) for c in choices), value)
+    raise at.expected(" or ".join(show(c) for c in choices), value)
 
 
 def _integer(value: object, at: _At, lo: int, hi: int | None = None) -> int:
@@ -506,10 +503,11 @@ _BOARD_KEYS = (
     "firmware",
     "max_queries",
 )
-_PTY_KEYS = ("link", "group", "mode")
+_PTY_KEYS = ("link", "group", "mode", "terminal")
+_TCP_KEYS = ("address", "terminal")
 _LOG_KEYS = ("file", "view", "group")
 _STATE_KEYS = ("file", "group")
-_CONTROL_KEYS = ("socket", "tcp")
+_CONTROL_KEYS = ("socket", "tcp", "group")
 _MQTT_KEYS = (
     "host",
     "port",
@@ -560,7 +558,20 @@ def _pty(value: object, at: _At, base: Path, name: str) -> PtyEndpoint:
     mode = DEFAULT_PTY_MODE
     if "mode" in table:
         mode = _hex_or_mode(table["mode"], at.key("mode"))
-    return PtyEndpoint(link, group, mode)
+    terminal = _boolean(table.get("terminal", False), at.key("terminal"), "true or false")
+    return PtyEndpoint(link, group, mode, terminal)
+
+
+def _board_tcp(value: object, at: _At) -> TcpEndpoint:
+    """A board's TCP endpoint: ``[HOST:]PORT``, ``PORT`` or ``{address, terminal}``."""
+    if not isinstance(value, dict):
+        return _tcp(value, at)
+    table = _table(value, at, _TCP_KEYS)
+    if "address" not in table:
+        raise at.error(f"expected a table with an address ({TCP_SYNTAX}), got none")
+    endpoint = _tcp(table["address"], at.key("address"))
+    terminal = _boolean(table.get("terminal", False), at.key("terminal"), "true or false")
+    return replace(endpoint, terminal=terminal)
 
 
 def _hex_or_mode(value: object, at: _At) -> int:
@@ -658,7 +669,7 @@ def _board(value: object, at: _At, index: int, base: Path) -> _Parsed:
                 raise at.key(key).error(
                     "is a driver link setting; a raw link keeps the board's own LF/CR framing"
                 )
-    tcp = [(_tcp(v, a), a) for v, a in _items(table.get("tcp", []), at.key("tcp"))]
+    tcp = [(_board_tcp(v, a), a) for v, a in _items(table.get("tcp", []), at.key("tcp"))]
     pty = [(_pty(v, a, base, name), a) for v, a in _items(table.get("pty", []), at.key("pty"))]
     if not tcp and not pty:
         raise at.error("expected at least one endpoint (tcp or pty), got none")
@@ -728,8 +739,11 @@ def _label(value: object, at: _At, pattern: str, what: str) -> str | None:
     raise at.expected(f"{what} like {pattern!r}", value)
 
 
-def _also(at: _At, other: _At) -> str:
-    return " twice" if at == other else f" (also {other.path or other.source})"
+def _duplicate(at: _At, other: _At, what: str, got: str) -> ConfigError:
+    detail = f"expected {what} no other endpoint uses, got {show(got, shorten=False)}"
+    if at == other:  # the same option twice on the command line
+        return at.error(detail + " twice")
+    return at.error(detail, other)
 
 
 def _check_unique(parsed: Iterable[_Parsed]) -> None:
@@ -740,24 +754,17 @@ def _check_unique(parsed: Iterable[_Parsed]) -> None:
         at = p.at.key("name")
         if p.board.name in names:
             raise at.error(
-                f"expected a name no other board has, got {p.board.name!r}"
-                + _also(at, names[p.board.name])
+                f"expected a name no other board has, got {show(p.board.name)}", names[p.board.name]
             )
         names[p.board.name] = at
         for endpoint, at in p.tcp:
             for other, other_at in tcps:
                 if _tcp_conflict(endpoint, other):
-                    raise at.error(
-                        f"expected an address no other endpoint uses, got {str(endpoint)!r}"
-                        + _also(at, other_at)
-                    )
+                    raise _duplicate(at, other_at, "an address", str(endpoint))
             tcps.append((endpoint, at))
         for pty, at in p.pty:
             if pty.link in ptys:
-                raise at.error(
-                    f"expected a link no other endpoint uses, got {str(pty.link)!r}"
-                    + _also(at, ptys[pty.link])
-                )
+                raise _duplicate(at, ptys[pty.link], "a link", str(pty.link))
             ptys[pty.link] = at
 
 
@@ -782,11 +789,17 @@ def load_config(path: str | os.PathLike[str]) -> DaemonConfig:
         document = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         message = str(exc)
-        m = re.fullmatch(r"(.*) \(at (line \d+, column \d+|end of document)\)", message)
-        where, what = (m.group(2), m.group(1)) if m else (None, message)
-        raise ConfigError(source, where, f"invalid TOML: {what}") from None
+        m = re.fullmatch(r"(.*) \(at line (\d+), column (\d+)\)", message)
+        if m is None:  # "(at end of document)": said as it is
+            raise ConfigError(source, None, f"invalid TOML: {message}") from None
+        line, column = int(m.group(2)), int(m.group(3))
+        detail = f"invalid TOML: {m.group(1)}"
+        raise ConfigError(source, None, detail, line=line, column=column) from None
     base = Path(source).expanduser().absolute().parent
-    return _document(document, _At(source), base)
+    try:
+        return _document(document, _At(source), base)
+    except ConfigError as exc:
+        raise exc.locate(text) from None
 
 
 def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
@@ -800,7 +813,7 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
         raise at.key("board").error("expected at least one [[board]] table, got none")
     if not isinstance(boards, list):
         raise at.key("board").expected("an array of tables, [[board]]", boards)
-    parsed = [_board(b, at.key("board").index(i), i, base) for i, b in enumerate(boards)]
+    parsed = [_board(b, _board_at(at, b, i), i, base) for i, b in enumerate(boards)]
     _check_unique(parsed)
     control = _control(document.get("control", {}), at.key("control"), base)
     mqtt = _mqtt(document["mqtt"], at.key("mqtt"), base) if "mqtt" in document else None
@@ -815,9 +828,17 @@ def _document(document: dict[str, object], at: _At, base: Path) -> DaemonConfig:
     )
 
 
+def _board_at(at: _At, value: object, index: int) -> _At:
+    """Where the ``index``-th ``[[board]]`` is, named in messages by its name (or, without one,
+    the name it is given: ``board1``, ...) rather than by its index."""
+    name = value.get("name") if isinstance(value, dict) else None
+    return at.key("board").index(index).labelled(board_label(name, index))
+
+
 def _control(value: object, at: _At, base: Path) -> ControlConfig:
     """``[control] socket = "PATH"`` (or ``false``: no control endpoint), ``tcp = "[HOST:]PORT"``
-    (off unless given)."""
+    (off unless given), ``group = "NAME"`` (the socket 0660 in that group, for its members'
+    ``omsd ctl``; default 0600, the daemon's user alone)."""
     table = _table(value, at, _CONTROL_KEYS)
     config = ControlConfig()
     if "socket" in table:
@@ -829,6 +850,8 @@ def _control(value: object, at: _At, base: Path) -> ControlConfig:
             config = replace(config, socket=path, explicit=True)
     if "tcp" in table:
         config = replace(config, tcp=_tcp(table["tcp"], at.key("tcp")))
+    if "group" in table:
+        config = replace(config, group=_file_group(table["group"], at.key("group")))
     return config
 
 
@@ -949,7 +972,9 @@ def _file_group(value: object, at: _At) -> str:
 
 
 def _not_the_log(at: _At, state: Path) -> ConfigError:
-    return at.error(f"expected a file other than the traffic log, got {str(state)!r}")
+    return at.error(
+        f"expected a file other than the traffic log, got {show(str(state), shorten=False)}"
+    )
 
 
 # -- the command line ---------------------------------------------------------------------------
@@ -962,10 +987,12 @@ def from_options(
     link: str | None,
     eos: str | None,
     log: str | None,
+    terminal: bool = False,
 ) -> DaemonConfig:
     """The single-board form of the command line: ``--board MODEL --tcp [HOST:]PORT ...
     --pty PATH ... --link driver|raw --eos HEX --log FILE``. Without --tcp and --pty, the
-    default endpoints; with either, only what is given."""
+    default endpoints; with either, only what is given. ``--terminal`` puts the ptys in
+    terminal mode (TCP stays exact: terminal TCP endpoints are for a configuration file)."""
     cwd = Path.cwd()
     model = _model(DEFAULT_MODEL if board is None else board, _At("--board"))
     link_ = "driver" if link is None else _choice(link, LINKS, _At("--link"))
@@ -982,6 +1009,8 @@ def from_options(
         default = _default_board()
         tcps = [(t, _At("--tcp")) for t in default.tcp]
         ptys = [(p, _At("--pty")) for p in default.pty]
+    if terminal:
+        ptys = [(replace(p, terminal=True), a) for p, a in ptys]
     config = BoardConfig(
         name=DEFAULT_BOARD_NAME,
         model=model.name,

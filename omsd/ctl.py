@@ -26,6 +26,12 @@ Exit status: 0 on success, 1 when the daemon refuses the operation (its one-line
 standard error, e.g. a wait that timed out), 2 for a usage error, 3 when the daemon cannot be
 reached (no socket, connection refused, the connection dropped, no reply in time).
 
+Where it looks (issue 14): ``--socket PATH`` or ``--tcp HOST:PORT`` when given; else the socket
+of an omsd started by this user (:func:`omsd.control.client.default_socket`), and, if there is
+none there, the systemd service's, :data:`SERVICE_SOCKET` (``RuntimeDirectory=omsd`` in
+``systemd/omsd.service``), which the members of its ``[control] group`` may use. When it reaches
+nothing it says, in one line, where it looked and how to point it elsewhere.
+
 Choices where nothing prescribes the behaviour: the global options (``--socket``, ``--tcp``,
 ``--board``, ``--json``) are also accepted after the subcommand (``omsd ctl state --json``);
 ``fault`` with no option and ``time`` with no action show the faults and the clock; ``fault
@@ -46,12 +52,18 @@ from typing import Any, NoReturn
 
 from omsd.control.client import Control, default_socket
 from omsd.control.protocol import ControlError
+from omsd.helptext import HelpFormatter, examples
 
 EXIT_REFUSED = 1
 EXIT_USAGE = 2
 EXIT_UNREACHABLE = 3
 
 DEFAULT_WAIT = 10.0  # seconds, as the daemon's own default for ``wait``
+
+#: The control socket of the systemd service: ``$RUNTIME_DIRECTORY/control.sock`` with
+#: ``RuntimeDirectory=omsd`` (systemd/omsd.service), where ``omsd ctl`` looks when no omsd of
+#: this user is running.
+SERVICE_SOCKET = Path("/run/omsd/control.sock")
 
 _SWITCH = {"on": True, "off": False, "auto": None}
 _LEVEL = {"high": True, "low": False, "auto": None}
@@ -153,32 +165,45 @@ def _globals(parser: argparse.ArgumentParser, default: Any) -> None:
         metavar="PATH",
         type=Path,
         default=default,
-        help=f"the daemon's control socket (default {default_socket()})",
+        help="the daemon's control socket, its --control or [control] socket (default:"
+        " $XDG_RUNTIME_DIR/omsd/control.sock, an omsd you started, else"
+        f" {SERVICE_SOCKET}, the systemd service's)",
     )
     where.add_argument(
         "--tcp",
         metavar="HOST:PORT",
         type=_hostport,
         default=default,
-        help="the daemon's control TCP endpoint ([control] tcp), instead of the socket",
+        help="the daemon's control TCP endpoint ([control] tcp), instead of the socket"
+        " (default: none)",
     )
     parser.add_argument(
-        "--board", metavar="NAME", default=default, help="the board (needed with several)"
+        "--board",
+        metavar="NAME",
+        default=default,
+        help="the board (default: the daemon's only board; needed with several)",
     )
     parser.add_argument(
         "--json",
         action="store_true",
         default=False if default is None else default,
-        help="print the operation's JSON result as it is",
+        help="print the operation's JSON result as it is (default: off, a summary)",
     )
 
 
 def parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="omsd ctl",
-        description="Reach behind the boards of a running omsd: switches, inputs, slip, "
-        "faults, time, power; watch their state.",
-        epilog="Exit status: 0 done, 1 refused by the daemon, 2 usage error, 3 daemon unreachable.",
+        description="Reach behind the boards of a running omsd: switches, inputs, slip,\n"
+        "faults, time, power; watch their state. Options may also follow COMMAND.",
+        epilog=examples(
+            ("omsd ctl boards", "the boards and where they are served"),
+            ("omsd ctl --board xy limit X + on", "close X's positive limit on board xy"),
+            ("omsd ctl wait done X --timeout 5", "until X's done flag is set"),
+        )
+        + "\n\nexit status: 0 done, 1 refused by the daemon, 2 usage error, 3 daemon\n"
+        "unreachable (it says where it looked).",
+        formatter_class=HelpFormatter,
     )
     _globals(p, None)
     common = _Parser(add_help=False)
@@ -187,7 +212,14 @@ def parser() -> argparse.ArgumentParser:
     sub.required = True
 
     def command(name: str, help: str) -> argparse.ArgumentParser:
-        return sub.add_parser(name, help=help, description=help, parents=[common])
+        return sub.add_parser(
+            name,
+            help=help,
+            description=help[0].upper() + help[1:] + ".",
+            parents=[common],
+            epilog=examples(*EXAMPLES[name]),
+            formatter_class=HelpFormatter,
+        )
 
     command("boards", "list the boards and their endpoints")
     command("state", "a board's state: axes, registers, link, clock, faults")
@@ -218,13 +250,26 @@ def parser() -> argparse.ArgumentParser:
     c.add_argument("counts", type=_integer, metavar="COUNTS")
 
     c = command("fault", "change the cable's faults (none given: show them)")
-    c.add_argument("--latency", type=_number, metavar="S", help="reply latency in seconds")
+    unchanged = " (default: unchanged; none at start)"
     c.add_argument(
-        "--baud", type=_baud, metavar="N|off", default=argparse.SUPPRESS, help="pace the link"
+        "--latency", type=_number, metavar="S", help="reply latency in seconds" + unchanged
     )
-    c.add_argument("--drop", type=_number, metavar="P", help="probability a byte is lost")
-    c.add_argument("--garble", type=_number, metavar="P", help="probability a byte is garbled")
-    c.add_argument("--seed", type=_integer, metavar="N", help="seed of the drop/garble dice")
+    c.add_argument(
+        "--baud",
+        type=_baud,
+        metavar="N|off",
+        default=argparse.SUPPRESS,
+        help="pace the link at N/10 characters a second" + unchanged,
+    )
+    c.add_argument(
+        "--drop", type=_number, metavar="P", help="probability a byte is lost" + unchanged
+    )
+    c.add_argument(
+        "--garble", type=_number, metavar="P", help="probability a byte is garbled" + unchanged
+    )
+    c.add_argument(
+        "--seed", type=_integer, metavar="N", help="seed of the drop/garble dice" + unchanged
+    )
     cable = c.add_mutually_exclusive_group()
     cable.add_argument("--cut", action="store_true", help="cut the cable (clients see EOF)")
     cable.add_argument("--connect", action="store_true", help="connect the cable again")
@@ -232,11 +277,42 @@ def parser() -> argparse.ArgumentParser:
 
     c = command("time", "pause, resume, step or scale the board's clock (none: show it)")
     actions = c.add_subparsers(dest="action", metavar="ACTION", parser_class=_Parser)
-    actions.add_parser("pause", help="stop the board's time", parents=[common])
-    actions.add_parser("resume", help="let it run again", parents=[common])
-    a = actions.add_parser("step", help="move paused time SECONDS forward", parents=[common])
+
+    def action(name: str, help: str, *example: tuple[str, str]) -> argparse.ArgumentParser:
+        return actions.add_parser(
+            name,
+            help=help,
+            description=help[0].upper() + help[1:] + ".",
+            parents=[common],
+            epilog=examples(*example),
+            formatter_class=HelpFormatter,
+        )
+
+    action(
+        "pause",
+        "stop the board's time",
+        ("omsd ctl time pause", "the board does nothing by itself"),
+        ("omsd ctl --board xy time pause", "board xy's clock"),
+    )
+    action(
+        "resume",
+        "let it run again",
+        ("omsd ctl time resume", "real time again"),
+        ("omsd ctl --board xy time resume", "board xy's clock"),
+    )
+    a = action(
+        "step",
+        "move paused time SECONDS forward",
+        ("omsd ctl time step 0.5", "half a second of board time"),
+        ("omsd ctl time step 0.0005", "about one sample (2048 a second)"),
+    )
     a.add_argument("seconds", type=_number, metavar="SECONDS")
-    a = actions.add_parser("scale", help="board seconds per real second", parents=[common])
+    a = action(
+        "scale",
+        "board seconds per real second",
+        ("omsd ctl time scale 10", "ten times as fast"),
+        ("omsd ctl time scale 1", "real time"),
+    )
     a.add_argument("factor", type=_number, metavar="FACTOR")
 
     command("reset", "power-cycle the board")
@@ -252,11 +328,35 @@ def parser() -> argparse.ArgumentParser:
         default=DEFAULT_WAIT,
         help=f"give up after S seconds (default {DEFAULT_WAIT:g})",
     )
-    a = until.add_parser("done", help="the axis's done flag is set", parents=[common, timeout])
+
+    def condition(name: str, help: str, *example: tuple[str, str]) -> argparse.ArgumentParser:
+        return until.add_parser(
+            name,
+            help=help,
+            description=f"Wait until {help}.",
+            parents=[common, timeout],
+            epilog=examples(*example),
+            formatter_class=HelpFormatter,
+        )
+
+    a = condition(
+        "done",
+        "the axis's done flag is set",
+        ("omsd ctl wait done X", "after AX MR1000 GO ID"),
+        ("omsd ctl wait done Y --timeout 30", "a longer move"),
+    )
     a.add_argument("axis", type=_axis, metavar="AXIS")
-    until.add_parser("idle", help="every axis at rest, queues empty", parents=[common, timeout])
-    a = until.add_parser(
-        "position", help="the axis's position reaches POS", parents=[common, timeout]
+    condition(
+        "idle",
+        "every axis at rest, queues empty",
+        ("omsd ctl wait idle", "everything sent has run"),
+        ("omsd ctl --board xy wait idle --timeout 60", "board xy, a minute at most"),
+    )
+    a = condition(
+        "position",
+        "the axis's position reaches POS",
+        ("omsd ctl wait position X 1000", "X at or past 1000"),
+        ("omsd ctl wait position Y -500 --timeout 5", "Y at or past -500"),
     )
     a.add_argument("axis", type=_axis, metavar="AXIS")
     a.add_argument("position", type=_integer, metavar="POS")
@@ -273,9 +373,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UsageError as exc:
         print(f"omsd ctl: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    where = f"{args.tcp[0]}:{args.tcp[1]}" if args.tcp else str(args.socket or default_socket())
     try:
-        with Control(args.socket, tcp=args.tcp) as ctl:
+        ctl = _connect(args)
+    except _Unreachable as exc:
+        print(f"omsd ctl: {exc}", file=sys.stderr)
+        return EXIT_UNREACHABLE
+    where = ctl.address
+    try:
+        with ctl:
             result, text = _run(ctl, args)
     except ControlError as exc:
         print(f"omsd ctl: {exc}", file=sys.stderr)
@@ -288,14 +393,69 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"omsd ctl: {exc}", file=sys.stderr)
             return EXIT_UNREACHABLE
         reason = exc.strerror or str(exc)
-        hint = "" if args.socket or args.tcp else " (is omsd running? --socket PATH)"
-        print(f"omsd ctl: cannot reach the daemon at {where}: {reason}{hint}", file=sys.stderr)
+        print(f"omsd ctl: lost the daemon at {where}: {reason}", file=sys.stderr)
         return EXIT_UNREACHABLE
     try:
         print(json.dumps(result, indent=2) if args.json else text, flush=True)
     except BrokenPipeError:  # ``omsd ctl state | head``: the reader had enough
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
+
+
+class _Unreachable(Exception):
+    """No daemon where omsd ctl looked; ``str()`` says where, why, and how to look elsewhere."""
+
+
+_ELSEWHERE = "point omsd ctl at the daemon's socket with --socket PATH (or --tcp HOST:PORT)"
+
+
+def _connect(args: argparse.Namespace) -> Control:
+    """A connection to the daemon: where the options say, else an omsd of this user's, else
+    the systemd service's (:data:`SERVICE_SOCKET`)."""
+    if args.tcp is not None:
+        host, port = args.tcp
+        try:
+            return Control(tcp=args.tcp)
+        except OSError as exc:
+            raise _Unreachable(
+                f"cannot reach the daemon at {host}:{port}: {_reason(exc)}; --tcp takes the"
+                " address of the daemon's [control] tcp"
+            ) from None
+    if args.socket is not None:
+        try:
+            return Control(args.socket)
+        except OSError as exc:
+            raise _Unreachable(
+                f"cannot reach the daemon at {args.socket}: {_reason(exc)}; --socket takes the"
+                " path of the daemon's --control or [control] socket (the systemd service's"
+                f" is {SERVICE_SOCKET})"
+            ) from None
+    looked = []
+    places = [(default_socket(), "an omsd you started"), (SERVICE_SOCKET, "the systemd service")]
+    for path, whose in places[: 1 if places[0][0] == SERVICE_SOCKET else 2]:
+        try:
+            return Control(path)
+        except (FileNotFoundError, ConnectionRefusedError) as exc:
+            looked.append(f"{path} ({whose}): {_reason(exc)}")
+        except PermissionError:
+            raise _Unreachable(
+                f"cannot reach the daemon at {path} ({whose}): permission denied; it is for"
+                " the daemon's user and the members of its [control] group: ask to be added"
+                " to that group, or use sudo"
+            ) from None
+        except OSError as exc:
+            raise _Unreachable(
+                f"cannot reach the daemon at {path} ({whose}): {_reason(exc)}; {_ELSEWHERE}"
+            ) from None
+    raise _Unreachable(f"no daemon found: {'; '.join(looked)}. Start omsd, or {_ELSEWHERE}")
+
+
+def _reason(exc: OSError) -> str:
+    if isinstance(exc, FileNotFoundError):
+        return "no such socket"
+    if isinstance(exc, ConnectionRefusedError):
+        return "connection refused (nobody listens)"
+    return exc.strerror or str(exc)
 
 
 def _check(args: argparse.Namespace) -> None:
@@ -488,4 +648,58 @@ def _summary(state: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["main", "parser"]
+#: Two examples for each command's help.
+EXAMPLES: dict[str, tuple[tuple[str, str], ...]] = {
+    "boards": (
+        ("omsd ctl boards", "names, models, endpoints"),
+        (f"omsd ctl --socket {SERVICE_SOCKET} boards", "the service's"),
+    ),
+    "state": (
+        ("omsd ctl state", "the only board's state"),
+        ("omsd ctl --board xy state --json", "board xy's, as JSON"),
+    ),
+    "limit": (
+        ("omsd ctl limit X + on", "X's positive limit switch closes"),
+        ("omsd ctl --board xy limit Y - auto", "the carriage decides again"),
+    ),
+    "home": (
+        ("omsd ctl home X on", "X's home switch active"),
+        ("omsd ctl home X auto", "as the carriage is"),
+    ),
+    "input": (
+        ("omsd ctl input 3 low", "input 3 grounded: true to WS and SW"),
+        ("omsd ctl input 3 auto", "released, pulled up"),
+    ),
+    "slip": (
+        ("omsd ctl slip X 20", "the encoder sees 20 steps, the counter not"),
+        ("omsd ctl --board xy slip Y -5", "5 steps the other way"),
+    ),
+    "stall": (
+        ("omsd ctl stall X on", "X's pulses count on, the carriage stays"),
+        ("omsd ctl stall X off", "it follows its pulses again"),
+    ),
+    "encoder": (
+        ("omsd ctl encoder Y 1500", "Y's encoder input reads 1500"),
+        ("omsd ctl --board servo encoder X 0", "board servo's X"),
+    ),
+    "fault": (
+        ("omsd ctl fault --latency 0.2 --baud 9600", "a slow serial line"),
+        ("omsd ctl fault --cut", "pull the cable (--connect: back)"),
+        ("omsd ctl fault --clear", "no faults"),
+    ),
+    "time": (
+        ("omsd ctl time", "the clock"),
+        ("omsd ctl time pause; omsd ctl time step 0.5", "half a second, exactly"),
+    ),
+    "reset": (
+        ("omsd ctl reset", "power-cycle the only board"),
+        ("omsd ctl --board xy reset", "board xy"),
+    ),
+    "wait": (
+        ("omsd ctl wait done X --timeout 5", "until X's done flag is set"),
+        ("omsd ctl wait idle", "until every axis is at rest"),
+    ),
+}
+
+
+__all__ = ["SERVICE_SOCKET", "main", "parser"]

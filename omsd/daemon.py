@@ -21,12 +21,13 @@ import signal
 import ssl
 import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from omsd import sdnotify
 from omsd.config import DaemonConfig, runtime_directory
 from omsd.control.server import ControlServer, SocketInUse
-from omsd.files import Refused, preflight
+from omsd.files import Refused, missing_directory, preflight, state_file_problem
 from omsd.service import BoardService
 from omsd.statefile import BoardFlash, StateFile, StateFileError
 from omsd.telemetry.traffic import TrafficLog
@@ -38,11 +39,25 @@ if TYPE_CHECKING:
     from omsd.mqtt import MqttBridge
 
 
-class StartupError(Exception):
-    """A board could not be brought up (a port in use, a pty link that cannot be made).
-    ``status`` is the exit status the command line gives it."""
+def same_terminal(a: TextIO, b: TextIO) -> bool:
+    """Whether two streams are the same terminal (the daemon run by hand: its standard output
+    and standard error on one screen)."""
+    try:
+        if not (a.isatty() and b.isatty()):
+            return False
+        return os.fstat(a.fileno()).st_rdev == os.fstat(b.fileno()).st_rdev
+    except (OSError, ValueError, AttributeError):
+        return False
 
-    status = 1
+
+class StartupError(Exception):
+    """The daemon cannot start: a port in use, a pty link or a state file that cannot be made,
+    a directory that is missing. ``str()`` is one line naming what and why; ``status`` is the
+    exit status the command line gives it: 2, like a configuration error, because starting
+    again does not help (systemd's ``RestartPreventExitStatus=2`` stops there instead of
+    looping). By the time it is raised, everything the daemon had opened is closed again."""
+
+    status = 2
 
 
 class StartupRefused(StartupError):
@@ -110,8 +125,14 @@ class Daemon:
     async def start(self) -> list[Endpoint]:
         loop = asyncio.get_running_loop()
         loop.set_exception_handler(self._loop_error)
-        self._preflight()
-        state = self._load_state()
+        runtime = runtime_directory()
+        made_runtime = not os.path.lexists(runtime)
+        try:
+            self._preflight()
+            state = self._load_state()
+        except BaseException:
+            self._remove_made_directory(runtime, made_runtime)
+            raise
         try:
             for board in self.config.boards:
                 service = BoardService(board, loop, self.log)
@@ -121,7 +142,7 @@ class Daemon:
                 for tcp in board.tcp:
                     try:
                         server, host, port = await serve_tcp(
-                            service, tcp.host, tcp.port, board.second_client
+                            service, tcp.host, tcp.port, board.second_client, tcp.terminal
                         )
                     except OSError as exc:
                         reason = os.strerror(exc.errno) if exc.errno else str(exc)
@@ -133,7 +154,7 @@ class Daemon:
                         Endpoint(board.name, board.model, board.link, "tcp", f"{host}:{port}")
                     )
                 for pty in board.pty:
-                    endpoint = PtyEndpoint(service, pty.link, pty.group, pty.mode)
+                    endpoint = PtyEndpoint(service, pty.link, pty.group, pty.mode, pty.terminal)
                     try:
                         device = endpoint.open()
                     except (OSError, KeyError) as exc:
@@ -153,27 +174,64 @@ class Daemon:
             await self._start_control()
             self._start_mqtt()
             # the endpoint lines go out last: whoever reads them may use the control socket at
-            # once, and a daemon that fails to start has announced nothing
+            # once, and a daemon that fails to start has announced nothing. On a terminal that
+            # shows both standard output and the log, each endpoint is said once (the log file,
+            # if any, still has it)
+            view = not same_terminal(self.out, self.log.stream)
             for announced in self.endpoints:
                 self.out.write(announced.line() + "\n")
-                self.log.info(f"serving {announced.line()}")
+                self.log.info(f"serving {announced.line()}", view=view)
             self.out.flush()
+            self._say_what_is_not_served()
         except BaseException:
             await self.stop(quiet=True)
+            self._remove_made_directory(runtime, made_runtime)
             raise
         return self.endpoints
 
+    def _say_what_is_not_served(self) -> None:
+        """``--tcp`` (or ``--pty``) alone replaces both default endpoints: say that no pty (no
+        TCP port) is served, where a user expecting the default one will look (issue 14)."""
+        board = self.config.boards[0]
+        if self.config.source != "command line":
+            return
+        if board.tcp and not board.pty:
+            self.log.info("no pty: --tcp given without --pty serves TCP only (add --pty PATH)")
+        elif board.pty and not board.tcp:
+            self.log.info(
+                "no TCP: --pty given without --tcp serves the pty only (add --tcp [HOST:]PORT)"
+            )
+
+    @staticmethod
+    def _remove_made_directory(path: Path, made: bool) -> None:
+        """A start that failed leaves nothing behind: the runtime directory it made, if empty."""
+        if made:
+            with contextlib.suppress(OSError):
+                path.rmdir()
+
     def _preflight(self) -> None:
-        """Refuse, before anything is created, the places that are not omsd's to use."""
+        """Refuse, before anything is created, the places that are not omsd's to use, and those
+        that cannot be used: a pty link whose directory is missing (omsd makes only its runtime
+        directory), a state file that could not be read or saved."""
+        runtime = runtime_directory()
         ptys = [(b.name, p.link) for b in self.config.boards for p in b.pty]
+        for name, link in ptys:
+            if not link.is_relative_to(runtime):
+                problem = missing_directory(link.parent)
+                if problem is not None:
+                    raise StartupError(f"{name}: cannot create pty link {link}: {problem}")
         try:
-            preflight(runtime_directory(), ptys, self.config.control.socket)
+            preflight(runtime, ptys, self.config.control.socket)
         except Refused as exc:
             raise StartupRefused(str(exc)) from None
         except OSError as exc:  # the runtime directory cannot be made, a path cannot be read
             reason = exc.strerror or str(exc)
-            where = exc.filename or runtime_directory()
+            where = exc.filename or runtime
             raise StartupError(f"cannot use {where}: {reason}") from None
+        if self.config.state is not None:
+            problem = state_file_problem(self.config.state)
+            if problem is not None:
+                raise StartupError(f"cannot use state file {self.config.state}: {problem}")
 
     async def _start_control(self) -> None:
         """The control endpoint: the Unix socket (owner-only), and TCP if configured. The
@@ -187,7 +245,7 @@ class Daemon:
         self.control = control
         if config.socket is not None:
             try:
-                await control.listen_unix(config.socket)
+                await control.listen_unix(config.socket, config.group)
             except SocketInUse:
                 if config.explicit:
                     raise StartupError(

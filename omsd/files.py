@@ -21,6 +21,11 @@ by :meth:`omsd.daemon.Daemon.start`), it refuses, with one line and exit status 
   regular file, a directory, a socket, a symlink anywhere else (:func:`pty_link_refusal`);
 * anything at the control socket's path that is not a socket (:func:`socket_refusal`).
 
+Nor does it start where it cannot work (:meth:`omsd.daemon.Daemon.start`, also exit status 2,
+issue 14): a pty link outside the runtime directory whose directory is missing
+(:func:`missing_directory`: omsd makes no directory there), a state file that could not be read
+or saved (:func:`state_file_problem`; its missing directories are made at the first save).
+
 Apart from those checks nothing here changes a file that omsd did not create: an existing log
 file keeps its owner, group and mode.
 """
@@ -174,6 +179,57 @@ def preflight(runtime: Path, ptys: Iterable[tuple[str, Path]], control: Path | N
             raise Refused(problem)
 
 
+def missing_directory(directory: Path) -> str | None:
+    """Why nothing can be created in ``directory`` (it is missing, or not a directory), or
+    ``None``. omsd makes no directory but its runtime directory (and the control socket's):
+    a path that names a directory that does not exist is a typing mistake more often than not."""
+    try:
+        st = os.stat(directory)
+    except FileNotFoundError:
+        return f"no directory {directory}"
+    except OSError as exc:
+        return f"cannot use directory {directory}: {exc.strerror or exc}"
+    if not stat.S_ISDIR(st.st_mode):
+        return f"{directory} is {_what(st.st_mode)}, not a directory"
+    return None
+
+
+def state_file_problem(path: Path) -> str | None:
+    """Why the state file at ``path`` could not be read or saved, or ``None``: the path is
+    something other than a regular file, or a file that cannot be read; or its directory could
+    not be written (a save writes a temporary file there and renames it; directories that do not
+    exist yet are made at the first save, so the nearest one that exists must be a writable
+    directory). A file that does not exist yet is fine (the first save creates it)."""
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        pass
+    except OSError as exc:  # a regular file where a directory should be (ENOTDIR), ...
+        return _blocked(path.parent) or exc.strerror or str(exc)
+    else:
+        if not stat.S_ISREG(st.st_mode):
+            return f"it is {_what(st.st_mode)}, not a file"
+        if not os.access(path, os.R_OK):
+            return "cannot read it: permission denied"
+    return _blocked(path.parent)
+
+
+def _blocked(directory: Path) -> str | None:
+    """Why nothing can be saved in ``directory``, made if need be, or ``None``."""
+    existing = directory
+    while not os.path.lexists(existing) and existing != existing.parent:
+        existing = existing.parent
+    try:
+        st = os.stat(existing)
+    except OSError as exc:
+        return f"cannot use directory {existing}: {exc.strerror or exc}"
+    if not stat.S_ISDIR(st.st_mode):
+        return f"{existing} is {_what(st.st_mode)}, not a directory"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"directory {existing} is not writable (a save writes a new file there)"
+    return None
+
+
 # -- files the daemon creates -------------------------------------------------------------------
 
 
@@ -212,8 +268,10 @@ __all__ = [
     "file_mode",
     "group_id",
     "is_pty_device",
+    "missing_directory",
     "open_log",
     "preflight",
     "pty_link_refusal",
     "socket_refusal",
+    "state_file_problem",
 ]

@@ -5,8 +5,12 @@ a usage error, 3 when the daemon cannot be reached."""
 
 from __future__ import annotations
 
+import grp
 import json
+import os
 import re
+import socket
+import stat
 import subprocess
 import sys
 import time
@@ -18,7 +22,9 @@ from typing import Any
 import pytest
 from daemon.process import POLL, TIMEOUT, Conn, Daemon, Omsd, daemon_env, run_omsd, wait_for
 
+from omsd import ctl as ctl_module
 from omsd.control.client import Control
+from omsd.ctl import main as ctl_main
 
 WY = b"PC48 ver 3.00-4"
 
@@ -337,12 +343,95 @@ def test_unreachable_exit_3(tmp_path: Path) -> None:
     done = run_omsd("ctl", "--socket", str(missing), "state")
     assert done.returncode == 3
     assert done.stderr == (
-        f"omsd ctl: cannot reach the daemon at {missing}: No such file or directory\n"
+        f"omsd ctl: cannot reach the daemon at {missing}: no such socket; --socket takes the"
+        " path of the daemon's --control or [control] socket (the systemd service's is"
+        " /run/omsd/control.sock)\n"
     )
     # nobody listening at a TCP port: port 9 (discard) is not served here
     done = run_omsd("ctl", "--tcp", "127.0.0.1:9", "boards")
     assert done.returncode == 3
-    assert done.stderr == "omsd ctl: cannot reach the daemon at 127.0.0.1:9: Connection refused\n"
+    assert done.stderr == (
+        "omsd ctl: cannot reach the daemon at 127.0.0.1:9: connection refused (nobody listens);"
+        " --tcp takes the address of the daemon's [control] tcp\n"
+    )
+
+
+def _ctl_in_process(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    status = ctl_main(list(args))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_without_a_daemon_it_says_where_it_looked(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No --socket: the socket of an omsd of this user, then the systemd service's; the one
+    line names both and how to point omsd ctl elsewhere (issue 14)."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    monkeypatch.delenv("RUNTIME_DIRECTORY", raising=False)
+    service = tmp_path / "service" / "control.sock"
+    monkeypatch.setattr(ctl_module, "SERVICE_SOCKET", service)
+    status, out, err = _ctl_in_process(capsys, "state")
+    assert (status, out) == (3, "")
+    assert err == (
+        f"omsd ctl: no daemon found: {tmp_path}/omsd/control.sock (an omsd you started): no"
+        f" such socket; {service} (the systemd service): no such socket. Start omsd, or point"
+        " omsd ctl at the daemon's socket with --socket PATH (or --tcp HOST:PORT)\n"
+    )
+
+
+def test_without_a_daemon_of_ones_own_the_service_is_used(
+    running: Running,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A user with no omsd of their own reaches the service's socket without --socket."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path / "nothing-here"))
+    monkeypatch.delenv("RUNTIME_DIRECTORY", raising=False)
+    monkeypatch.setattr(ctl_module, "SERVICE_SOCKET", running.socket)
+    status, out, err = _ctl_in_process(capsys, "boards")
+    assert (status, err) == (0, "")
+    assert out.startswith("board1  PC48-4E  driver  tcp 127.0.0.1:")
+
+
+def test_a_stale_socket_of_ones_own_is_passed_over(
+    running: Running,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A socket file left by an omsd that is gone (connection refused) is looked past too."""
+    mine = tmp_path / "mine"
+    (mine / "omsd").mkdir(parents=True)
+    stale = socket.socket(socket.AF_UNIX)
+    stale.bind(str(mine / "omsd" / "control.sock"))
+    stale.close()  # bound, never listened: connecting is refused
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(mine))
+    monkeypatch.delenv("RUNTIME_DIRECTORY", raising=False)
+    monkeypatch.setattr(ctl_module, "SERVICE_SOCKET", running.socket)
+    status, out, err = _ctl_in_process(capsys, "boards")
+    assert (status, err) == (0, "") and out.startswith("board1  ")
+
+
+def test_the_service_socket_is_the_units() -> None:
+    """SERVICE_SOCKET is $RUNTIME_DIRECTORY/control.sock of systemd/omsd.service."""
+    unit = (Path(__file__).resolve().parent.parent / "systemd" / "omsd.service").read_text()
+    (directory,) = re.findall(r"^RuntimeDirectory=(\S+)$", unit, re.M)
+    assert Path("/run") / directory / "control.sock" == ctl_module.SERVICE_SOCKET
+
+
+def test_a_control_group_makes_the_socket_the_groups(omsd: Omsd, tmp_path: Path) -> None:
+    """[control] group: the socket is 0660 in that group, for its members' omsd ctl."""
+    group = grp.getgrgid(os.getegid()).gr_name
+    path = tmp_path / "c.sock"
+    omsd(
+        config=f'[control]\nsocket = "{path}"\ngroup = "{group}"\n[[board]]\ntcp = "127.0.0.1:0"\n',
+        expect=1,
+    )
+    connect_control(path).close()
+    st = os.stat(path)
+    assert stat.S_IMODE(st.st_mode) == 0o660 and st.st_gid == os.getegid()
 
 
 def test_a_board_port_is_not_a_control_endpoint(running: Running) -> None:

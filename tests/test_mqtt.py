@@ -125,7 +125,7 @@ def test_mqtt_tls_changes_the_default_port(tmp_path: Path) -> None:
     ("text", "where", "detail"),
     [
         ("prefix = 'x'", "mqtt.host", "expected the broker's host name or address, got none"),
-        ("host = 'a b'", "mqtt.host", "expected a host name or address, got 'a b'"),
+        ("host = 'a b'", "mqtt.host", 'expected a host name or address, got "a b"'),
         ("host = '1.2.3.999'", "mqtt.host", "expected a host name or address"),
         ("host = 'h'\nport = 0", "mqtt.port", "expected an integer 1..65535, got 0"),
         ("host = 'h'\nprefix = 'a/+/b'", "mqtt.prefix", "without '+', '#'"),
@@ -134,7 +134,7 @@ def test_mqtt_tls_changes_the_default_port(tmp_path: Path) -> None:
         ("host = 'h'\nprefix = ''", "mqtt.prefix", "topic levels"),
         ("host = 'h'\nstate_rate = 0", "mqtt.state_rate", "above 0 and at most 1000, got 0"),
         ("host = 'h'\nstate_rate = true", "mqtt.state_rate", "publications per second"),
-        ("host = 'h'\ntraffic = 'yes'", "mqtt.traffic", "expected true or false, got 'yes'"),
+        ("host = 'h'\ntraffic = 'yes'", "mqtt.traffic", 'expected true or false, got "yes"'),
         ("host = 'h'\npassword = 'secret'", "mqtt.password", "expected a username"),
         ("host = 'h'\nusername = 'u'\npassword = 5", "mqtt.password", "value given is not shown"),
         ("host = 'h'\ntls = 'missing.pem'", "mqtt.tls", "a CA certificate file"),
@@ -152,13 +152,15 @@ def test_mqtt_config_errors_are_one_line(
         _load(tmp_path, f"[mqtt]\n{text}\n")
     message = str(info.value)
     assert "\n" not in message
-    assert message.startswith(f"{tmp_path / 'omsd.toml'}: {where}: "), message
+    # FILE:LINE: the key's line, or, for a missing key, its table's ([mqtt], line 1)
+    line = 1 if "got none" in detail else text.count("\n") + 2
+    assert message.startswith(f"{tmp_path / 'omsd.toml'}:{line}: {where}: "), message
     assert detail in message
     assert "secret" not in message
 
 
 def test_mqtt_must_be_a_table(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match=r"mqtt: expected a table, got 'broker'"):
+    with pytest.raises(ConfigError, match=r'mqtt: expected a table, got "broker"'):
         _load(tmp_path, 'mqtt = "broker"\n')
 
 

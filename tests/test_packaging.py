@@ -450,20 +450,27 @@ def test_unit_shares_the_hosts_ptys(unit: configparser.ConfigParser) -> None:
 def test_unit_fits_the_example_config(
     unit: configparser.ConfigParser, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """config/omsd.toml, the file ExecStart= names once installed, works under this unit: pty
-    links in the RuntimeDirectory, pty groups among SupplementaryGroups, the log file in the
-    LogsDirectory."""
+    """config/systemd.toml, the file ExecStart= names once installed (the unit's comment and
+    docs/deploy.md install it), works under this unit: pty links and the control socket in the
+    RuntimeDirectory, pty groups among SupplementaryGroups, the log file in the LogsDirectory,
+    the state file in the StateDirectory."""
     service = unit["Service"]
+    assert "install -D -m 0644 config/systemd.toml /etc/omsd/omsd.toml" in UNIT.read_text()
+    deploy = (ROOT / "docs" / "deploy.md").read_text()
+    assert "install -D -m 0644 config/systemd.toml /etc/omsd/omsd.toml" in deploy
     monkeypatch.setenv("RUNTIME_DIRECTORY", "/run/" + service["RuntimeDirectory"])
-    config = load_config(ROOT / "config" / "omsd.toml")
+    config = load_config(ROOT / "config" / "systemd.toml")
     groups = set(service.get("SupplementaryGroups", "").split())
     ptys = [p for b in config.boards for p in b.pty]
     assert ptys
     for pty in ptys:
         assert pty.link.parent == Path("/run/omsd"), pty.link
         assert pty.group is None or pty.group in groups, pty.group
-    if config.log.file is not None:
-        assert config.log.file.parent == Path("/var/log") / service["LogsDirectory"]
+    assert config.log.file is not None and config.state is not None
+    assert config.log.file.parent == Path("/var/log") / service["LogsDirectory"]
+    assert config.state.parent == Path("/var/lib") / service["StateDirectory"]
+    assert config.control.socket is not None
+    assert config.control.socket.parent == Path("/run") / service["RuntimeDirectory"]
 
 
 @pytest.mark.skipif(shutil.which("systemd-analyze") is None, reason="no systemd-analyze")

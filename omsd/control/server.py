@@ -22,6 +22,7 @@ from typing import Any
 from omsd.board.events import Event
 from omsd.control.protocol import MAX_LINE, OPS, ControlError, decode, encode
 from omsd.faults import Faults
+from omsd.files import group_id
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Traffic, TrafficLog
 from omsd.transport import Endpoint
@@ -52,9 +53,12 @@ class ControlServer:
 
     # -- listening ------------------------------------------------------------------------------
 
-    async def listen_unix(self, path: Path) -> None:
+    async def listen_unix(self, path: Path, group: str | None = None) -> None:
         """Listen at ``path``; :class:`SocketInUse` if a live process holds it (a stale socket
-        file left by a killed daemon is replaced)."""
+        file left by a killed daemon is replaced). The socket is the daemon's user's alone
+        (0600), or with ``group`` (``[control] group``) 0660 in that group, so that its members
+        can use ``omsd ctl`` (the daemon must be a member: a process gives files only to its
+        own groups)."""
         if path.exists() or path.is_symlink():
             if _alive(path):
                 raise SocketInUse(str(path))
@@ -66,9 +70,11 @@ class ControlServer:
             server = await asyncio.start_unix_server(self._connection, path, limit=MAX_LINE)
         finally:
             os.umask(old)
-        os.chmod(path, 0o600)
         self.servers.append(server)
         self.paths.append(path)
+        if group is not None:
+            os.chown(path, -1, group_id(group))
+        os.chmod(path, 0o600 if group is None else 0o660)
 
     async def listen_tcp(self, host: str, port: int) -> tuple[str, int]:
         server = await asyncio.start_server(self._connection, host, port, limit=MAX_LINE)

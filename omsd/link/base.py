@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from omsd.board import Board, Event
+from omsd.board import Board, CommandErrorEvent, Event, Output, Reply
 
 
 @dataclass(frozen=True)
@@ -47,6 +47,25 @@ def merge(pieces: list[tuple[int, bytes]], session: int, data: bytes) -> None:
         pieces[-1] = (session, pieces[-1][1] + data)
     else:
         pieces.append((session, data))
+
+
+def message_first(out: list[Output], sources: list[int]) -> None:
+    """With echo on (EN) a command error comes with "an English readable error message", a
+    framed reply the board writes just after it sets CMD_S. The driver delays its ``#`` "until
+    after the end of the message string" (§7.3.3), and so does the raw link's: each such error
+    event is moved after its message, in place (docs/decisions.md, "Echo (EN)")."""
+    for i in range(len(out) - 1):
+        event, message = out[i], out[i + 1]
+        if (
+            isinstance(event, CommandErrorEvent)
+            and isinstance(message, Reply)
+            and message.text is not None
+            and sources[i] == sources[i + 1]
+            and message.time == event.time
+            and message.text == f"{event.kind.message}: {event.command}".encode("latin-1")
+        ):
+            out[i], out[i + 1] = message, event
+            sources[i], sources[i + 1] = sources[i + 1], sources[i]
 
 
 class Link(Protocol):

@@ -18,6 +18,13 @@ What a host program sees through the driver differs from the board's own stream:
   waits for a limit interrupt; "All characters following the * up to the next control character
   (<LF>, <CR>, <TAB>, et cetera) are ignored by the device driver and are not passed to the
   controller."
+* Echo (EN): the board's echo of what it reads is a string from the board like any other: the
+  driver strips its LF and CR characters and ends it with the end character where the board's
+  LF or CR ends it (the host's own line end, echoed, or the ``<LF><CR>`` that opens a reply or
+  the English error message), and before a marker. ``EN WY`` gives `` WY<LF>PC48 ver
+  3.00-4<LF>``: the echo and the reply are two strings, never one (docs/decisions.md, "Echo").
+  The ``#`` of a command error follows its message ("the interrupt symbol will be delayed
+  until after the end of the message string").
 * The 'output to board' buffer (§7.3.2, B:XXXX, default 256 characters) holds what the host
   has written and the driver has not passed on; when it is full the host is held off.
 
@@ -37,7 +44,7 @@ from omsd.board import (
     Reply,
     SlipEvent,
 )
-from omsd.link.base import Held, LinkOutput, merge
+from omsd.link.base import Held, LinkOutput, merge, message_first
 
 CONTROL_D = 0x04
 CONTROL_Y = b"\x19"
@@ -81,6 +88,7 @@ class DriverLink:
         self._wait_session = 0
         self._wait_since = 0.0
         self._pieces: list[tuple[int, bytes]] = []
+        self._echoing: set[int] = set()  # sessions given echoed text not yet ended by the EOS
         self._events: list[Event] = []
         self._notes: list[str] = []
         self._last_done: float | None = None
@@ -152,6 +160,7 @@ class DriverLink:
             self._waiting = None
         if self._comment == session:
             self._comment = None
+        self._echoing.discard(session)
         for key in [k for k in self._unclaimed if k[1] == session]:
             del self._unclaimed[key]
         return dropped
@@ -159,6 +168,7 @@ class DriverLink:
     def reset_input(self) -> int:
         dropped = len(self._pending)
         self._clear()
+        self._echoing.clear()
         return dropped
 
     def take_notes(self) -> list[str]:
@@ -275,35 +285,38 @@ class DriverLink:
     def _collect(self, now: float) -> None:
         board = self.board
         out, sources = board.take_output_sourced()
+        message_first(out, sources)
         pieces = self._pieces
+        eos = self.eos
         for item, source in zip(out, sources, strict=True):
             if isinstance(item, Reply):
                 if item.text is not None:
-                    merge(pieces, source, item.text + self.eos)
+                    self._end_echo(source)
+                    merge(pieces, source, item.text + eos)
                 else:
-                    # echoed characters: the driver "strips off the LF and CR's"
-                    merge(pieces, source, item.data.replace(b"\n", b"").replace(b"\r", b""))
+                    self._echo(source, item.data)
                 continue
             self._events.append(item)
             # the interrupt service routine reads the status register (clearing it) first
             board.read_status_register(now)
             mine = self._waiting is not None and source in (self._wait_session, 0)
+            self._end_echo(source)
             if isinstance(item, CommandErrorEvent):
-                merge(pieces, source, b"#" + self.eos)
+                merge(pieces, source, b"#" + eos)
             elif isinstance(item, LimitEvent):
-                merge(pieces, source, b"@" + self.eos)
+                merge(pieces, source, b"@" + eos)
                 if mine and self._waiting == WAIT_LIMIT and item.time >= self._wait_since:
                     self._release(now)
                 else:
                     self._unclaimed[(WAIT_LIMIT, source)] = item.time
             elif isinstance(item, SlipEvent):
-                merge(pieces, source, b"$" + self.eos)
+                merge(pieces, source, b"$" + eos)
             elif isinstance(item, DoneEvent):
                 done = board.read_done_register(now)
                 if not (done == 0 and self._last_done == item.time):
                     # completions on the same sample are one interrupt: the first read of the
                     # register has every bit, a second marker would only say "nothing"
-                    merge(pieces, source, b"!" + bytes([done]) + self.eos)
+                    merge(pieces, source, b"!" + bytes([done]) + eos)
                 self._last_done = item.time
                 if mine and self._waiting == WAIT_DONE and item.time >= self._wait_since:
                     session = self._wait_session
@@ -311,3 +324,29 @@ class DriverLink:
                     board.receive(CONTROL_Y, now, session)
                 else:
                     self._unclaimed[(WAIT_DONE, source)] = item.time
+
+    def _echo(self, source: int, data: bytes) -> None:
+        """Echoed characters: the driver "strips off the LF and CR's"; where one ends echoed
+        text, the text is a string and gets the end character."""
+        out = bytearray()
+        echoing = source in self._echoing
+        for b in data:
+            if b == 0x0A or b == 0x0D:
+                if echoing:
+                    out += self.eos
+                    echoing = False
+            else:
+                out.append(b)
+                echoing = True
+        if echoing:
+            self._echoing.add(source)
+        else:
+            self._echoing.discard(source)
+        if out:
+            merge(self._pieces, source, bytes(out))
+
+    def _end_echo(self, source: int) -> None:
+        """A reply or a marker for ``source``: echoed text before it is a string of its own."""
+        if source in self._echoing:
+            self._echoing.discard(source)
+            merge(self._pieces, source, self.eos)

@@ -5,13 +5,14 @@ replies keep their native framing (``<LF><CR>value<LF><CR>``, ``<LF><CR><CR>stat
 "A command error must be visible in the stream as a lone ``#``"; and the client "must not
 receive ``!``, ``@`` or ``$`` bytes on this link: its parser counts them as header bytes and then
 eats the first byte of the next reply." Done, limit and slip are therefore reported only as
-events (for the traffic log), never as bytes.
+events (for the traffic log), never as bytes. With echo on (EN) the ``#`` follows the English
+error message (``XQ<LF><CR>Unrecognized command: XQ<LF><CR>#``), as the driver's does.
 """
 
 from __future__ import annotations
 
 from omsd.board import Board, CommandErrorEvent, Event, Reply
-from omsd.link.base import Held, LinkOutput, merge
+from omsd.link.base import Held, LinkOutput, merge, message_first
 
 
 class RawLink:
@@ -27,6 +28,7 @@ class RawLink:
         board = self.board
         board.advance(now)
         out, sources = board.take_output_sourced()
+        message_first(out, sources)
         pieces: list[tuple[int, bytes]] = []
         events: list[Event] = []
         for item, source in zip(out, sources, strict=True):

@@ -323,9 +323,15 @@ class TrafficLog:
             text.append(f"[{what}]", _EVENT)
             self._rich(text)
 
-    def info(self, message: str) -> None:
-        """Log one of the daemon's messages (startup, where each board can be reached...)."""
-        self._message("info", SD_INFO, message)
+    @property
+    def stream(self) -> TextIO:
+        """Where the view is written (standard error unless given)."""
+        return self._stream
+
+    def info(self, message: str, *, view: bool = True) -> None:
+        """Log one of the daemon's messages (startup, where each board can be reached...);
+        ``view=False``: to the file only (the terminal shows it already)."""
+        self._message("info", SD_INFO, message, view)
 
     def warning(self, message: str) -> None:
         """Log something that went wrong but that the daemon survives."""
@@ -382,10 +388,12 @@ class TrafficLog:
 
     # ----------------------------------------------------------------- the stream
 
-    def _message(self, level: str, prefix: str, message: str) -> None:
+    def _message(self, level: str, prefix: str, message: str, view: bool = True) -> None:
         t = self._clock()
         if self._fd is not None:
             self._write_file({"t": t, "kind": level, "message": message})
+        if not view:
+            return
         label = "" if level == "info" else f"{level}: "
         lines = message.splitlines() or [""]
         if self.view == "plain":

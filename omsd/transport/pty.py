@@ -22,6 +22,9 @@ slave device through a stable symlink and talks to the board. The daemon:
 * points the symlink at the slave atomically (a new link is renamed over the old one) and
   removes it on exit if it still points at this pty.
 
+With ``terminal`` on, the endpoint edits a line at a time, shows what is typed and gives the
+board's line ends as CR LF (:mod:`omsd.transport.terminal`); off, bytes pass untouched.
+
 Output for a client that does not read waits in the terminal's buffer; beyond what the kernel
 buffers, and a bounded backlog here, it is dropped (a serial port would overwrite it too).
 """
@@ -40,18 +43,28 @@ import tty
 
 from omsd.service import BoardService
 from omsd.transport.inotify import CLOSED, OPENED, OpenWatch, watch_opens
+from omsd.transport.terminal import Terminal, terminal_for
 
 MAX_BACKLOG = 64 * 1024
 
 
 class PtyEndpoint:
     def __init__(
-        self, service: BoardService, link: pathlib.Path, group: str | None = None, mode: int = 0o660
+        self,
+        service: BoardService,
+        link: pathlib.Path,
+        group: str | None = None,
+        mode: int = 0o660,
+        terminal: bool = False,
     ) -> None:
         self.service = service
         self.link = link
         self.group = group
         self.mode = mode
+        self.terminal: Terminal | None = None
+        if terminal:
+            board = service.board
+            self.terminal = terminal_for(service.link, lambda: board.interpreter.echo)
         self.label = f"pty:{link}"
         self.session = 0
         self.connected = False  # a session is running: someone has the slave open
@@ -134,6 +147,8 @@ class PtyEndpoint:
 
     def _connect(self) -> None:
         self.connected = True
+        if self.terminal is not None:
+            self.terminal.reset()
         if self._sessions:
             self.service.open_session(self)
         self._sessions += 1
@@ -206,7 +221,7 @@ class PtyEndpoint:
                 break
             if not data:
                 break
-            self._pending += data
+            self._take(data)
         if self._pending:
             self._push()
 
@@ -236,8 +251,16 @@ class PtyEndpoint:
                 return
             raise
         if data:
-            self._pending += data
+            self._take(data)
             self._push()
+
+    def _take(self, data: bytes) -> None:
+        """What the client wrote, for the board (through the terminal's line editing)."""
+        if self.terminal is not None:
+            data, screen = self.terminal.typed(data)
+            if screen:
+                self._write(screen)
+        self._pending += data
 
     def _push(self) -> None:
         if self._pending:
@@ -259,7 +282,12 @@ class PtyEndpoint:
     # -- output ---------------------------------------------------------------------------------
 
     def send(self, data: bytes) -> None:
-        if self.master < 0 or not self.connected:
+        if self.terminal is not None:
+            data = self.terminal.shown(data)
+        self._write(data)
+
+    def _write(self, data: bytes) -> None:
+        if self.master < 0 or not self.connected or not data:
             return
         self._backlog += data
         if len(self._backlog) > MAX_BACKLOG:

@@ -11,6 +11,10 @@ Each connection is a session of the board's service (:mod:`omsd.service`): when 
 wrote and the board has not taken is dropped, and what the board still says for it is not the
 next client's. A client that shuts down its sending side (``nc -N``, ``shutdown(SHUT_WR)``) is
 kept open until what it sent is done, at most the board's ``linger`` seconds, then closed.
+
+With ``terminal`` on (for a client that puts its terminal in raw mode, such as ``socat
+-,rawer TCP:HOST:PORT``), the endpoint edits a line at a time, shows what is typed and gives the
+board's line ends as CR LF (:mod:`omsd.transport.terminal`); off, bytes pass untouched.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import os
 from typing import cast
 
 from omsd.service import BoardService
+from omsd.transport.terminal import Terminal, terminal_for
 
 # Bytes queued for a client that does not read before further output is dropped (logged once).
 MAX_PENDING_OUTPUT = 256 * 1024
@@ -29,10 +34,16 @@ _serial = itertools.count(1)
 
 
 class TcpClient(asyncio.Protocol):
-    def __init__(self, service: BoardService, endpoint: str, policy: str) -> None:
+    def __init__(
+        self, service: BoardService, endpoint: str, policy: str, terminal: bool = False
+    ) -> None:
         self.service = service
         self.endpoint = endpoint
         self.policy = policy
+        self.terminal: Terminal | None = None
+        if terminal:
+            board = service.board
+            self.terminal = terminal_for(service.link, lambda: board.interpreter.echo)
         self.label = endpoint
         self.session = 0
         self.transport: asyncio.Transport | None = None
@@ -74,8 +85,16 @@ class TcpClient(asyncio.Protocol):
     def data_received(self, data: bytes) -> None:
         if self.transport is None:
             return
-        self._pending += data
+        self._take(data)
         self._push()
+
+    def _take(self, data: bytes) -> None:
+        """What the client wrote, for the board (through the terminal's line editing)."""
+        if self.terminal is not None:
+            data, screen = self.terminal.typed(data)
+            if screen:
+                self._write(screen)
+        self._pending += data
 
     def eof_received(self) -> bool:
         """The client shut down its sending side: keep the connection (True) while what it sent
@@ -128,8 +147,13 @@ class TcpClient(asyncio.Protocol):
         self._push()
 
     def send(self, data: bytes) -> None:
+        if self.terminal is not None:
+            data = self.terminal.shown(data)
+        self._write(data)
+
+    def _write(self, data: bytes) -> None:
         transport = self.transport
-        if transport is None or transport.is_closing():
+        if transport is None or transport.is_closing() or not data:
             return
         if transport.get_write_buffer_size() > MAX_PENDING_OUTPUT:
             if not self._dropping:
@@ -160,7 +184,7 @@ class TcpClient(asyncio.Protocol):
                     break
                 if not data:
                     break
-                self._pending += data
+                self._take(data)
         if self._pending:
             self._push()
         self.service.end_session(self, len(self._pending), "taken over")
@@ -182,14 +206,14 @@ class TcpClient(asyncio.Protocol):
 
 
 async def serve_tcp(
-    service: BoardService, host: str, port: int, policy: str
+    service: BoardService, host: str, port: int, policy: str, terminal: bool = False
 ) -> tuple[asyncio.Server, str, int]:
     """Listen for the board; returns the server and the address actually bound (port 0 asks
-    the system for a free port)."""
+    the system for a free port). ``terminal``: each client gets the terminal option."""
     loop = asyncio.get_running_loop()
     label = [f"tcp:{host}:{port}"]
     server = await loop.create_server(
-        lambda: TcpClient(service, label[0], policy), host, port, reuse_address=True
+        lambda: TcpClient(service, label[0], policy, terminal), host, port, reuse_address=True
     )
     bound = server.sockets[0].getsockname()
     label[0] = f"tcp:{bound[0]}:{bound[1]}"

@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import math
 
+from omsd.board.board import Board
 from omsd.board.events import ErrorKind, LimitEvent, SlipEvent
 from omsd.board.harness import Harness
 from omsd.board.registers import DON_S, ENC_S, OVRT
 from omsd.board.world import AxisWorld
+from omsd.link import DriverLink
+from omsd.models import get_model
 
 from .support import (
     at,
@@ -1263,11 +1266,23 @@ def test_x1_typical_move_string() -> None:
 
 
 def test_x2_en_wy_echo_then_model() -> None:
-    """X2 (§2.3 step 14) ``EN WY`` on a 4-axis board: the typed characters are echoed and the
-    board answers ``PC48 ver 3.00-4`` in the usual frame."""
+    """X2 (§2.3 step 14, §7.1) ``EN WY`` on a 4-axis board: "EN turns echoing on which causes
+    the typed commands to be echoed from the controller to the display. WY asks the PC48 board
+    "who are you". The board responds with its model type and firmware version number (i.e.
+    PC48 ver 3.00-4)." EN is read while echo is still off; what is read after it (the space, W,
+    Y) is echoed as it is read, and the answer comes "surrounded by line feeds and carriage
+    returns" (§7.3.2), so it starts on a line of its own: exactly these bytes."""
     h = Harness("PC48-4")
-    out = h.send("EN WY")
-    assert out.endswith(b"WY\n\rPC48 ver 3.00-4\n\r")
+    assert h.send("EN WY") == b" WY\n\rPC48 ver 3.00-4\n\r"
+
+
+def test_x2_en_wy_through_the_driver() -> None:
+    """X2 through the DOS driver, which "strips off the LF and CR's" and ends each string with
+    its end character (LF): the echo is one string and the answer another, so the two never run
+    together (docs/decisions.md, "Echo (EN)")."""
+    link = DriverLink(Board(get_model("PC48-4"), 0.0))
+    link.from_host(b"EN WY", 0.0)
+    assert link.to_host(0.0).data == b" WY\nPC48 ver 3.00-4\n"
 
 
 def test_x3_rm_of_minus_4050_by_2000_gives_1950() -> None:

@@ -747,7 +747,7 @@ def test_a_second_daemon_on_the_same_socket_fails_with_one_line(omsd: Omsd, tmp_
     omsd("--tcp", "127.0.0.1:0", "--control", str(path))
     with control(path) as ctl:
         second = run_omsd("--tcp", "127.0.0.1:0", "--control", str(path), "--view", "off")
-        assert second.returncode == 1
+        assert second.returncode == 2
         assert second.stderr == f"omsd: control socket {path} is in use by another process\n"
         # the first daemon keeps its socket
         assert ctl.state()["board"] == "board1"

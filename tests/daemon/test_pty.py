@@ -29,6 +29,7 @@ def ask(port: serial.Serial, command: bytes) -> bytes:
 
 def test_pty_link_points_at_a_group_usable_raw_pty(omsd: Omsd, tmp_path: Path) -> None:
     link = tmp_path / "run" / "board1"
+    link.parent.mkdir()  # omsd makes no directory for a link (issue 14: a missing one is refused)
     daemon = omsd("--pty", str(link))
     (endpoint,) = daemon.endpoints
     assert (endpoint.board, endpoint.model, endpoint.link, endpoint.kind) == (
@@ -98,10 +99,23 @@ def test_pty_write_larger_than_the_driver_buffer(omsd: Omsd, tmp_path: Path) -> 
         assert port.read(100) == b""
 
 
+def _holds(pid: int, device: str) -> bool:
+    """Process ``pid`` has ``device`` open."""
+    fds = Path(f"/proc/{pid}/fd")
+    try:
+        return any(os.readlink(fd) == device for fd in fds.iterdir())
+    except OSError:
+        return False
+
+
 def _cat_round(link: Path, position: int) -> None:
     reader = subprocess.Popen(["cat", str(link)], stdout=subprocess.PIPE)
     try:
         assert reader.stdout is not None
+        # cat reads from its open on, as at a shell: the answers to a printf that came before
+        # would be for nobody (a session of their own, flushed when it ends)
+        device = os.path.realpath(link)
+        assert wait_for(lambda: _holds(reader.pid, device)), "cat never opened the pty"
         out = reader.stdout
         os.set_blocking(out.fileno(), False)
         got = bytearray()

@@ -111,6 +111,7 @@ def test_eos_changes_the_end_character(omsd: Omsd) -> None:
 
 def test_several_boards_from_one_file_are_independent(omsd: Omsd, tmp_path: Path) -> None:
     xy_pty = tmp_path / "pty" / "xy"
+    xy_pty.parent.mkdir()  # omsd makes no directory for a link (issue 14)
     config = f"""
 [[board]]
 name = "xy"

@@ -192,11 +192,41 @@ def test_buffer_option_limits_what_the_host_can_write_at_once() -> None:
 
 
 def test_echo_through_the_driver() -> None:
-    """EN echoes what is typed; the driver strips the LF and CR characters from it too."""
+    """EN echoes what is typed; the driver strips the LF and CR characters from it too, and
+    ends the echoed text with its end character where the board's LF/CR ends it: the echo and
+    the reply are two strings, not one (docs/decisions.md, "Echo (EN)")."""
     h = driver()
     h.write(b"EN\rWY\r")
-    # EN cannot echo itself; from its CR on, every character comes back (CR and LF stripped)
-    assert h.take() == b"WYPC48 ver 3.00-4\n"
+    # EN cannot echo itself, nor its CR (nothing echoed yet to end); the board then sends
+    # "WY<LF><CR>PC48 ver 3.00-4<LF><CR><CR>": two strings, and a CR that ends nothing
+    assert h.take() == b"WY\nPC48 ver 3.00-4\n"
+
+
+def test_echoed_lines_end_with_the_end_character() -> None:
+    """An echoed line with no reply ends where the host's line end is echoed; a CR LF pair, or
+    a line end after a reply, gives no empty string."""
+    h = driver(eos=0x0D)
+    h.write(b"EN\r\nAX MR10 GO\r\nRP\r\n\r\n")
+    assert h.take() == b"AX MR10 GO\rRP\r0\r"
+
+
+def test_markers_and_errors_with_echo_on() -> None:
+    """A marker never joins echoed text: the echo before it is ended first. A command error's
+    English message comes before its ``#`` ("the interrupt symbol will be delayed until after
+    the end of the message string", §7.3.3)."""
+    h = driver()
+    h.write(b"EN XQ AX MR1000 GO ID")
+    assert h.take() == b" XQ\nUnrecognized command: XQ\n#\n AX MR1000 GO ID"
+    h.run(2.0)
+    assert h.take() == b"\n!\x01\n"
+
+
+def test_raw_link_puts_the_error_mark_after_the_message() -> None:
+    """The raw link's lone ``#`` follows the English message too; the board's own framing and
+    echo are otherwise untouched."""
+    h = Host(RawLink(Board(get_model("PC48-4"), 0.0)))
+    h.write(b"EN XQ WY\r")
+    assert h.take() == (b" XQ\n\rUnrecognized command: XQ\n\r# WY\n\rPC48 ver 3.00-4\n\r\r")
 
 
 def test_the_command_file_of_section_7_3_4() -> None:

@@ -51,6 +51,7 @@ from omsd.board.axis import Motion
 from omsd.board.events import Output
 from omsd.board.registers import CMD_S
 from omsd.link import DriverLink, RawLink
+from omsd.link.base import message_first
 from omsd.models import MODELS, Model
 
 PATIENCE = 5.0
@@ -177,6 +178,7 @@ class FuzzHost:
         self._errors_since_status_read = 0
 
     def _new_link(self) -> DriverLink | RawLink:
+        self._echoing = False  # the driver has given echoed text not yet ended by its EOS
         return DriverLink(self.board) if self.kind == "driver" else RawLink(self.board)
 
     @property
@@ -199,6 +201,9 @@ class FuzzHost:
         errors = sum(isinstance(e, CommandErrorEvent) for e in board_events)
         self.counters.errors += errors
         self._errors_since_status_read += errors
+        # with echo on, a command error's "#" follows its English message (both links)
+        items = list(items)
+        message_first(items, [0] * len(items))
         if self.kind == "raw":
             expected = b"".join(
                 i.data
@@ -213,11 +218,22 @@ class FuzzHost:
         eos = re.escape(self.eos)
         pattern = []
         for i in items:
+            if isinstance(i, Reply) and i.text is None:
+                # echoed characters: LF and CR stripped, the end character where one ends text
+                for b in i.data:
+                    if b in b"\n\r":
+                        if self._echoing:
+                            pattern.append(eos)
+                        self._echoing = False
+                    else:
+                        pattern.append(re.escape(bytes([b])))
+                        self._echoing = True
+                continue
+            if self._echoing:  # a reply or a marker ends the echoed text
+                pattern.append(eos)
+                self._echoing = False
             if isinstance(i, Reply):
-                if i.text is not None:
-                    pattern.append(re.escape(i.text) + eos)
-                else:
-                    pattern.append(re.escape(i.data.replace(b"\n", b"").replace(b"\r", b"")))
+                pattern.append(re.escape(i.text or b"") + eos)
             elif isinstance(i, CommandErrorEvent):
                 pattern.append(b"#" + eos)
             elif isinstance(i, LimitEvent):
@@ -380,12 +396,14 @@ class FuzzHost:
         self.wait(self.model.init_time + 0.1)
         self.read_status()
         self.received.clear()
+        # the echo of "AX EF" (if echo was on) is a string the driver ends before the next one
+        ended = self.eos if self._echoing else b""
         errors_before = self.counters.errors
         end = b";" if self.model.dialect == "pcix" else b""
         assert self.pass_on(bad_word(self.model) + b"WY" + end, 1.0)
         self.wait(0.1)
         expected = who_are_you(self.model, self.kind, self.eos)
-        error = b"#" + self.eos
+        error = ended + b"#" + self.eos
         assert bytes(self.received) == error + expected, (
             f"after recovery: {bytes(self.received)!r}, expected {error + expected!r}"
         )

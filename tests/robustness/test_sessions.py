@@ -161,7 +161,10 @@ def test_replies_never_cross_sessions(
     host.run_until(host.t + 1.0)  # an RS of A's leaves the board initialising for 0.1 s
     heard_from_b(bytes(host.got[B]), b"\x04" + words)
 
+    # with echo on (A may have left it on), "AX EF" was echoed: through the driver it is a
+    # string, which the end character closes before the next one (docs/decisions.md, "Echo")
+    ended = b"\n" if kind == "driver" and host.got[B].endswith(b"EF") else b""
     host.got[B].clear()
     assert host.write(B, wy * 3) == 3 * len(wy)
     host.run_until(host.t + 1.0)
-    assert bytes(host.got[B]) == answer * 3
+    assert bytes(host.got[B]) == ended + answer * 3

@@ -1,0 +1,195 @@
+"""Issue 14: a daemon that cannot start says what and why in one line, exits with status 2 and
+leaves nothing behind (no listening socket, pty link, control socket file or directory it made).
+
+Each test runs the real daemon (``python -m omsd``) on free ports and in its own directories, and
+looks afterwards: the first board's port refuses connections, the pty link and the control
+socket are not there.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from .process import Omsd, run_omsd
+
+
+@pytest.fixture(autouse=True)
+def _runtime(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
+    """A runtime directory of the test's own (the default control socket and pty links)."""
+    base = tmp_path / "xdg"
+    base.mkdir(mode=0o700)
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(base))
+    monkeypatch.delenv("RUNTIME_DIRECTORY", raising=False)
+    yield base / "omsd"
+
+
+def failed(result: subprocess.CompletedProcess[str]) -> str:
+    """The one line of a start that failed: status 2, nothing on standard output."""
+    assert "Traceback" not in result.stderr, result.stderr
+    assert result.returncode == 2, (result.returncode, result.stderr)
+    assert result.stdout == "", result.stdout
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, f"expected one line on stderr, got {result.stderr!r}"
+    return lines[0]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def refused(port: int) -> bool:
+    """Nobody listens on ``port`` (a start that failed closed what it had opened)."""
+    with socket.socket() as s:
+        s.settimeout(2.0)
+        try:
+            s.connect(("127.0.0.1", port))
+        except ConnectionRefusedError:
+            return True
+    return False
+
+
+def nothing_left(tmp_path: Path, runtime: Path, port: int, *paths: Path) -> None:
+    assert refused(port), f"something still listens on the first board's port {port}"
+    for path in paths:
+        assert not os.path.lexists(path), f"{path} was left behind"
+    assert not os.path.lexists(runtime), f"the runtime directory {runtime} was left behind"
+
+
+@pytest.fixture
+def busy() -> Iterator[int]:
+    """A port somebody else listens on."""
+    with socket.socket() as holder:
+        holder.bind(("127.0.0.1", 0))
+        holder.listen()
+        yield int(holder.getsockname()[1])
+
+
+def test_a_port_in_use_on_a_later_board(tmp_path: Path, _runtime: Path, busy: int) -> None:
+    """The first board is up (its port listens, its pty link exists, the control socket too in
+    the daemon's order of things) when the second board's port turns out to be taken."""
+    first, link, control = free_port(), tmp_path / "first", tmp_path / "control.sock"
+    path = tmp_path / "two.toml"
+    path.write_text(
+        f'[[board]]\nname = "first"\npty = "{link}"\ntcp = "127.0.0.1:{first}"\n\n'
+        f'[[board]]\nname = "second"\ntcp = "127.0.0.1:{busy}"\n'
+    )
+    line = failed(run_omsd("--config", str(path), "--control", str(control), cwd=tmp_path))
+    assert line == f"omsd: second: cannot listen on tcp 127.0.0.1:{busy}: address already in use"
+    nothing_left(tmp_path, _runtime, first, link, control)
+
+
+def test_the_default_control_socket_and_runtime_directory_go_too(
+    tmp_path: Path, _runtime: Path, busy: int
+) -> None:
+    """With the default control socket: neither it nor the runtime directory made for it stay."""
+    first = free_port()
+    line = failed(run_omsd("--tcp", f"127.0.0.1:{first}", "--tcp", f"127.0.0.1:{busy}"))
+    assert line == f"omsd: board1: cannot listen on tcp 127.0.0.1:{busy}: address already in use"
+    nothing_left(tmp_path, _runtime, first, _runtime / "control.sock")
+
+
+def test_a_log_that_cannot_be_opened(tmp_path: Path, _runtime: Path) -> None:
+    port, log, link = free_port(), tmp_path / "missing" / "traffic.jsonl", tmp_path / "b1"
+    result = run_omsd("--tcp", f"127.0.0.1:{port}", "--pty", str(link), "--log", str(log))
+    line = failed(result)
+    assert line == f"omsd: cannot open traffic log {log}: No such file or directory"
+    nothing_left(tmp_path, _runtime, port, link, log.parent)
+
+
+def test_a_log_path_that_is_a_directory(tmp_path: Path, _runtime: Path) -> None:
+    port = free_port()
+    line = failed(run_omsd("--tcp", f"127.0.0.1:{port}", "--log", str(tmp_path)))
+    assert line == f"omsd: cannot open traffic log {tmp_path}: Is a directory"
+    nothing_left(tmp_path, _runtime, port)
+
+
+def test_a_state_file_under_a_regular_file(tmp_path: Path, _runtime: Path) -> None:
+    """A state file's missing directories are made at the first save (as before); one that
+    cannot be made, a regular file in the way, stops the start."""
+    port, link = free_port(), tmp_path / "b1"
+    (tmp_path / "file").write_text("")
+    state = tmp_path / "file" / "states" / "omsd.state"
+    result = run_omsd("--tcp", f"127.0.0.1:{port}", "--pty", str(link), "--state", str(state))
+    line = failed(result)
+    assert line == (
+        f"omsd: cannot use state file {state}: {tmp_path / 'file'} is a regular file, not a"
+        " directory"
+    )
+    nothing_left(tmp_path, _runtime, port, link)
+
+
+def test_a_state_file_that_is_a_directory(tmp_path: Path, _runtime: Path) -> None:
+    port, state = free_port(), tmp_path / "omsd.state"
+    state.mkdir()
+    line = failed(run_omsd("--tcp", f"127.0.0.1:{port}", "--state", str(state)))
+    assert line == f"omsd: cannot use state file {state}: it is a directory, not a file"
+    nothing_left(tmp_path, _runtime, port)
+
+
+def test_a_state_file_from_a_configuration_file(tmp_path: Path, _runtime: Path) -> None:
+    """The same check for ``[state] file``: the path as the file resolves it."""
+    port = free_port()
+    path = tmp_path / "omsd.toml"
+    path.write_text(f'[state]\nfile = "."\n[[board]]\ntcp = {port}\n')
+    line = failed(run_omsd("--config", str(path)))
+    assert line == f"omsd: cannot use state file {tmp_path}: it is a directory, not a file"
+    nothing_left(tmp_path, _runtime, port)
+
+
+def test_a_pty_link_whose_directory_is_missing(tmp_path: Path, _runtime: Path) -> None:
+    """omsd makes no directory but its runtime directory: a typing mistake is not created."""
+    port, link = free_port(), tmp_path / "missing" / "b1"
+    line = failed(run_omsd("--tcp", f"127.0.0.1:{port}", "--pty", str(link)))
+    assert line == f"omsd: board1: cannot create pty link {link}: no directory {link.parent}"
+    nothing_left(tmp_path, _runtime, port, link.parent)
+
+
+def test_a_pty_link_in_a_file_that_is_no_directory(tmp_path: Path, _runtime: Path) -> None:
+    port, parent = free_port(), tmp_path / "file"
+    parent.write_text("")
+    link = parent / "b1"
+    line = failed(run_omsd("--tcp", f"127.0.0.1:{port}", "--pty", str(link)))
+    assert line == (
+        f"omsd: board1: cannot create pty link {link}: {parent} is a regular file, not a directory"
+    )
+    nothing_left(tmp_path, _runtime, port)
+
+
+def test_a_control_socket_in_use(omsd: Omsd, tmp_path: Path, _runtime: Path) -> None:
+    """A configured control socket held by another daemon: the second daemon's boards, already
+    listening by then, are closed again."""
+    control = tmp_path / "c.sock"
+    omsd("--tcp", "127.0.0.1:0", "--pty", str(tmp_path / "a"), "--control", str(control))
+    port, link = free_port(), tmp_path / "b"
+    result = run_omsd("--tcp", f"127.0.0.1:{port}", "--pty", str(link), "--control", str(control))
+    assert failed(result) == f"omsd: control socket {control} is in use by another process"
+    assert refused(port) and not os.path.lexists(link)
+    assert control.exists()  # the first daemon's, untouched
+
+
+def test_tcp_without_pty_says_that_no_pty_is_served(omsd: Omsd) -> None:
+    """``--tcp`` alone replaces the default endpoints: the log says no pty is served."""
+    daemon = omsd("--tcp", "127.0.0.1:0", "--view", "plain", expect=1)
+    assert [e.kind for e in daemon.endpoints] == ["tcp"]
+    assert daemon.stop() == 0
+    assert "no pty: --tcp given without --pty serves TCP only (add --pty PATH)" in daemon.stderr
+
+
+def test_pty_without_tcp_says_that_no_tcp_is_served(omsd: Omsd, tmp_path: Path) -> None:
+    daemon = omsd("--pty", str(tmp_path / "p"), "--view", "plain")
+    assert daemon.stop() == 0
+    assert "no TCP: --pty given without --tcp serves the pty only" in daemon.stderr
+
+
+def test_both_given_says_nothing_about_it(omsd: Omsd, tmp_path: Path) -> None:
+    daemon = omsd("--tcp", "127.0.0.1:0", "--pty", str(tmp_path / "p"), "--view", "plain")
+    assert daemon.stop() == 0
+    assert "no pty" not in daemon.stderr and "no TCP" not in daemon.stderr
