@@ -1,16 +1,26 @@
-"""omsd benchmarks (issue 7): measured speed and bounded cost, each figure beside its baseline.
+"""omsd benchmarks (issues 7 and 16): measured speed and bounded cost, each figure beside its
+baseline and its target.
 
-``python -m bench`` runs them all (a minute or two) and prints one table; ``python -m bench
---quick`` is the short version CI runs (a few seconds, few samples: it shows that every row can
-be measured, the figures themselves mean little).
+``python -m bench`` runs them all (three to four minutes) and prints one table; ``python -m
+bench --quick`` is the short version CI runs (about half a minute, few samples: it shows that
+every row can be measured, the figures themselves mean little); ``--fast`` adds uvloop,
+``--peers`` other simulators (:mod:`bench.envs` installs what they need into a cache).
 
-Every figure is taken side by side with a baseline in the same run on the same machine, because
-the machine may be shared and busy: the baseline is a bare asyncio server (:mod:`bench.echo`)
-doing the least a server can do on the same transport with the same bytes. The benchmarks:
+Every figure is taken side by side with a baseline in the same run on the same machine, the
+client pinned to one core and the servers to the others (:func:`bench.procs.pin`). The
+baselines are the plainest servers that can answer on the same transport and the same loop
+(:mod:`bench.echo`) and, below them, blocking I/O with no loop at all (:mod:`bench.floor`).
+The benchmarks:
 
-* :mod:`bench.latency`   ``RP`` round trip over TCP and over the pty, median and p99;
-* :mod:`bench.throughput` 100,000 pipelined commands (queries and queued moves) on one link;
-* :mod:`bench.cost`      CPU of idle boards and of boards in motion being polled, 1/8/32 boards;
-* :mod:`bench.fidelity`  when a move's done marker arrives against the manual's profile;
-* :mod:`bench.startup`   from exec to the first endpoint accepting a connection.
+* :mod:`bench.latency`    ``RP`` round trip over TCP and the pty: omsd as users run it, view off,
+  driver link, against the echoes and the floor (and on uvloop);
+* :mod:`bench.versions`   the same under Python 3.12 and 3.13;
+* :mod:`bench.interp`     one interpreter step in process; long motion on the manual clock;
+* :mod:`bench.throughput` pipelined ``RP`` on one board; 100,000 mixed pipelined commands;
+* :mod:`bench.cost`       CPU of idle boards and of boards in motion being polled, 1 to 128;
+* :mod:`bench.scale`      1,000 boards in one daemon: ready time, memory, idle CPU;
+* :mod:`bench.fidelity`   when a move's done marker arrives against the manual's profile;
+* :mod:`bench.startup`    the commands a user types, and the daemon's first accept;
+* :mod:`bench.isolation`  one board's replies while another's client misbehaves; churn cycles;
+* :mod:`bench.peers`      other simulators beside omsd (``--peers`` only).
 """

@@ -1,13 +1,17 @@
-"""``python -m bench [--quick] [--only NAME,...]``: run the benchmarks, print the table.
+"""``python -m bench [--quick] [--fast] [--peers] [--only NAME,...]``: run the benchmarks, print
+the table.
 
 Progress goes to standard error, the table (Markdown) to standard output, preceded by the
-machine it ran on. The exit status is 0 when every row was measured (whatever the verdicts: the
+machine it ran on, the event loop and where client and servers were pinned. The exit status is
+0 when every row was measured or says why it could not be here (whatever the verdicts: the
 figures depend on the machine), 1 when a benchmark failed (its error is in the notes).
 """
 
 from __future__ import annotations
 
 import argparse
+import asyncio
+import dataclasses
 import os
 import platform
 import sys
@@ -16,7 +20,19 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from bench import cost, fidelity, latency, startup, throughput
+from bench import (
+    cost,
+    fidelity,
+    interp,
+    isolation,
+    latency,
+    peers,
+    procs,
+    scale,
+    startup,
+    throughput,
+    versions,
+)
 from bench.settings import FULL, QUICK, Settings
 from bench.table import Row, render
 
@@ -24,12 +40,19 @@ Benchmark = Callable[[Settings, Path], list[Row]]
 
 BENCHMARKS: dict[str, Benchmark] = {
     "latency": latency.run,
+    "versions": versions.run,
+    "interpreter": interp.run,
+    "pipeline": throughput.pipelined,
     "throughput": throughput.run,
     "idle": cost.idle,
     "load": cost.load,
+    "scale": scale.run,
     "fidelity": fidelity.run,
     "startup": startup.run,
+    "isolation": isolation.run,
+    "churn": isolation.churn,
 }
+OPTIONAL: dict[str, Benchmark] = {"peers": peers.run}
 
 
 def machine() -> str:
@@ -43,9 +66,16 @@ def machine() -> str:
     except OSError:
         pass
     load = os.getloadavg()
+    loop = asyncio.new_event_loop()
+    try:
+        loop_name = f"{type(loop).__module__}.{type(loop).__name__}"
+    finally:
+        loop.close()
     return (
         f"{model}, {os.cpu_count()} cores, Python {platform.python_version()},"
-        f" Linux {platform.release()}; load average at start {load[0]:.2f}"
+        f" Linux {platform.release()}; load average at start {load[0]:.2f}\n"
+        f"event loop: {loop_name} (asyncio's default; uvloop only in rows that say so)\n"
+        f"placement: {procs.PINNING.describe()}"
     )
 
 
@@ -53,18 +83,30 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench", description=__doc__)
     parser.add_argument("--quick", action="store_true", help="the short version CI runs")
     parser.add_argument(
-        "--only", metavar="NAME,...", help=f"run only these: {', '.join(BENCHMARKS)}"
+        "--fast",
+        action="store_true",
+        help="also measure omsd on uvloop (installed into ~/.cache/omsd-bench if need be)",
     )
+    parser.add_argument(
+        "--peers",
+        action="store_true",
+        help="also measure other simulators (installed into ~/.cache/omsd-bench; never in CI)",
+    )
+    parser.add_argument(
+        "--no-pin", action="store_true", help="leave client and servers wherever they land"
+    )
+    known = [*BENCHMARKS, *OPTIONAL]
+    parser.add_argument("--only", metavar="NAME,...", help=f"run only these: {', '.join(known)}")
     options = parser.parse_args(argv)
-    names = list(BENCHMARKS)
+    names = list(BENCHMARKS) + (list(OPTIONAL) if options.peers else [])
     if options.only:
         names = [n.strip() for n in options.only.split(",") if n.strip()]
-        unknown = [n for n in names if n not in BENCHMARKS]
+        unknown = [n for n in names if n not in known]
         if unknown:
-            parser.error(
-                f"unknown benchmark(s) {', '.join(unknown)}; known: {', '.join(BENCHMARKS)}"
-            )
+            parser.error(f"unknown benchmark(s) {', '.join(unknown)}; known: {', '.join(known)}")
     settings = QUICK if options.quick else FULL
+    settings = dataclasses.replace(settings, fast=options.fast)
+    procs.pin(not options.no_pin)
     header = machine()
     rows: list[Row] = []
     ok = True
@@ -74,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"bench: {name}...", file=sys.stderr, flush=True)
             t0 = time.monotonic()
             try:
-                rows += BENCHMARKS[name](settings, Path(tmp))
+                rows += {**BENCHMARKS, **OPTIONAL}[name](settings, Path(tmp))
             except Exception as exc:
                 ok = False
                 rows.append(Row(f"{name}: failed", "", None, note=f"{type(exc).__name__}: {exc}"))
@@ -86,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {header}")
     print()
     print(render(rows))
-    ok = ok and all(r.figure is not None for r in rows)
+    ok = ok and all(r.figure is not None or r.skipped for r in rows)
     return 0 if ok else 1
 
 

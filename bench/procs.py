@@ -1,9 +1,15 @@
-"""The servers under measurement, as subprocesses: omsd itself and the baseline echo server.
+"""The servers under measurement, as subprocesses: omsd itself, the baselines, the peers.
 
-Both print one line per endpoint on standard output, in omsd's format
+Each prints one line per endpoint on standard output, in omsd's format
 (``<board> <model> <link> tcp 127.0.0.1:PORT`` and ``<board> <model> <link> pty PATH ->
 /dev/pts/N``); :class:`Server` waits for those lines with a deadline and parses them. Standard
-error goes to a file (shown if the server fails), so a chatty server never blocks on a pipe.
+error goes to a file (shown if the server fails), so a chatty server never blocks on a pipe: a
+server run "as users run it" writes its default view (plain lines, as under systemd or with
+stderr redirected) to that file.
+
+Placement: unpinned, two identical servers differ by up to 1.8x depending on the core they land
+on (issue 16), so :func:`pin` puts this process (the client) on one core and every server on
+the others (:data:`PINNING`), and says so in the table's header; with one core it cannot.
 
 CPU cost is the process's time on the CPU: utime + stime from ``/proc/<pid>/stat``, and the
 same to the nanosecond from ``/proc/<pid>/task/*/schedstat`` (:func:`cpu_exact`, what the
@@ -14,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import resource
 import select
 import signal
 import socket
@@ -30,18 +37,90 @@ TIMEOUT = 15.0
 """Seconds allowed for a server to start or stop (it normally takes a fraction of one)."""
 
 CLOCK_TICK = os.sysconf("SC_CLK_TCK")
+ROOT = Path(__file__).resolve().parent.parent
 
 
-def server_env() -> dict[str, str]:
-    """The environment of a server under test: never systemd's notify socket or journal."""
+@dataclass
+class Pinning:
+    """Which cores the client (this process and its threads) and the servers run on."""
+
+    client: frozenset[int] | None = None
+    servers: frozenset[int] | None = None
+    why_not: str = "not pinned yet"
+
+    def describe(self) -> str:
+        if self.client is None or self.servers is None:
+            return f"client and servers not pinned ({self.why_not})"
+        return (
+            f"client pinned to core {_cores(self.client)}, servers to core"
+            f"{'s' * (len(self.servers) > 1)} {_cores(self.servers)} (sched_setaffinity)"
+        )
+
+
+def _cores(cores: frozenset[int]) -> str:
+    return ",".join(str(c) for c in sorted(cores))
+
+
+PINNING = Pinning()
+
+
+def pin(enabled: bool = True) -> Pinning:
+    """Pin this process to the first core it may use and leave the others to the servers
+    started from now on (:func:`server_setup`). With one core, or ``enabled`` false, nothing
+    is pinned and :data:`PINNING` says why."""
+    allowed = sorted(os.sched_getaffinity(0))
+    if not enabled:
+        PINNING.why_not = "--no-pin"
+    elif len(allowed) < 2:
+        PINNING.why_not = f"only {len(allowed)} core available to this process"
+    else:
+        PINNING.client = frozenset(allowed[:1])
+        PINNING.servers = frozenset(allowed[1:])
+        os.sched_setaffinity(0, PINNING.client)
+        PINNING.why_not = ""
+    return PINNING
+
+
+def server_setup() -> None:
+    """In a server's child process before exec: its cores, and as many file descriptors as the
+    hard limit allows (1,000 boards need more than the usual soft limit of 1,024)."""
+    if PINNING.servers is not None:
+        os.sched_setaffinity(0, PINNING.servers)
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard == resource.RLIM_INFINITY or hard > soft:
+        with contextlib.suppress(ValueError, OSError):
+            resource.setrlimit(resource.RLIMIT_NOFILE, (hard, hard))
+
+
+def server_env(path: Sequence[str] = ()) -> dict[str, str]:
+    """The environment of a server under test: never systemd's notify socket or journal; this
+    checkout first on the module path (``python -m bench.echo``, and omsd from this tree under
+    another interpreter), then ``path``."""
     env = dict(os.environ)
     for name in ("NOTIFY_SOCKET", "JOURNAL_STREAM", "WATCHDOG_USEC", "WATCHDOG_PID", "LISTEN_FDS"):
         env.pop(name, None)
     env["PYTHONUNBUFFERED"] = "1"
-    # ``python -m bench.echo`` from wherever the benchmark was started
-    root = str(Path(__file__).resolve().parent.parent)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (root, env.get("PYTHONPATH")) if p)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), *path, env.get("PYTHONPATH")) if p)
     return env
+
+
+@dataclass(frozen=True)
+class Python:
+    """An interpreter to run servers with, and what it needs on its module path: the running
+    one by default; ``fast``: asyncio's loop replaced by uvloop (:mod:`bench.fastloop`)."""
+
+    executable: str = sys.executable
+    path: tuple[str, ...] = ()
+    fast: bool = False
+    label: str = ""
+
+    def argv(self, module: str, args: Sequence[str]) -> list[str]:
+        if self.fast:
+            return [self.executable, "-m", "bench.fastloop", module, *args]
+        return [self.executable, "-m", module, *args]
+
+
+HERE = Python()
 
 
 def cpu_seconds(pid: int) -> float:
@@ -66,6 +145,15 @@ def cpu_exact(pid: int) -> float:
     except (OSError, ValueError, IndexError):
         return cpu_seconds(pid)
     return total / 1e9
+
+
+def rss_kib(pid: int) -> int:
+    """Resident set size (``VmRSS`` in ``/proc/<pid>/status``), KiB."""
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    raise RuntimeError(f"no VmRSS for process {pid}")
 
 
 def free_port() -> int:
@@ -104,30 +192,45 @@ class Endpoint:
 
 
 class Server:
-    """A server subprocess (``python -m MODULE ARGS``) and its endpoints."""
+    """A server subprocess (``python -m MODULE ARGS``, or any ``argv``) and its endpoints, on
+    the servers' cores. ``started`` is when it was executed, ``ready`` when its last endpoint
+    line came (``time.perf_counter``)."""
 
-    def __init__(self, module: str, args: Sequence[str], expect: int, name: str = "") -> None:
-        self.argv = [sys.executable, "-m", module, *args]
+    def __init__(
+        self,
+        module: str,
+        args: Sequence[str],
+        expect: int,
+        name: str = "",
+        python: Python = HERE,
+        argv: Sequence[str] | None = None,
+        env: dict[str, str] | None = None,
+        timeout: float = TIMEOUT,
+    ) -> None:
+        self.argv = list(argv) if argv is not None else python.argv(module, args)
         self.name = name or module
         self._err = tempfile.TemporaryFile()  # noqa: SIM115 - lives as long as the server
+        self.started = time.perf_counter()
         self.proc = subprocess.Popen(
             self.argv,
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=self._err,
-            env=server_env(),
+            env=env if env is not None else server_env(python.path),
+            preexec_fn=server_setup,
         )
         try:
-            self.endpoints = [Endpoint.parse(line) for line in self._lines(expect)]
+            self.endpoints = [Endpoint.parse(line) for line in self._lines(expect, timeout)]
+            self.ready = time.perf_counter()
         except BaseException:
             self.kill()
             raise
 
-    def _lines(self, n: int) -> list[str]:
+    def _lines(self, n: int, timeout: float) -> list[str]:
         assert self.proc.stdout is not None
         fd = self.proc.stdout.fileno()
         data = b""
-        deadline = time.monotonic() + TIMEOUT
+        deadline = time.monotonic() + timeout
         while data.count(b"\n") < n:
             left = deadline - time.monotonic()
             ready, _, _ = select.select([fd], [], [], max(left, 0.0))
@@ -156,6 +259,10 @@ class Server:
     def cpu_ticks(self) -> float:
         """CPU seconds used so far, from utime + stime (:func:`cpu_seconds`)."""
         return cpu_seconds(self.proc.pid)
+
+    def rss_kib(self) -> int:
+        """Resident memory now (``VmRSS``), KiB."""
+        return rss_kib(self.proc.pid)
 
     def tcp(self, i: int = 0) -> tuple[str, int]:
         """The address of the ``i``-th TCP endpoint."""
@@ -196,23 +303,39 @@ class BoardSpec:
     model: str
     link: str = "raw"
     pty: bool = False
+    tcp: bool = True
 
 
-def omsd(boards: Sequence[BoardSpec], directory: Path) -> Server:
-    """Start omsd on ``boards``: each on a free TCP port (and a pty in ``directory`` if asked),
-    no live view, no control socket."""
-    lines = ['[log]\nview = "off"\n', "[control]\nsocket = false\n"]
+def omsd(
+    boards: Sequence[BoardSpec],
+    directory: Path,
+    view: str = "off",
+    python: Python = HERE,
+    timeout: float = TIMEOUT,
+) -> Server:
+    """Start omsd on ``boards``: each on a free TCP port (and a pty in ``directory`` if asked).
+    ``view="off"``: no live view and no control socket, omsd stripped to its boards. Any other
+    ``view`` (``"auto"``: omsd as users run it) keeps the default live view, which with standard
+    error in a file is the plain lines systemd's journal gets, and a control socket in
+    ``directory``, as the defaults have it."""
+    stamp = time.monotonic_ns()
+    lines = [f'[log]\nview = "{view}"\n']
+    if view == "off":
+        lines.append("[control]\nsocket = false\n")
+    else:
+        lines.append(f'[control]\nsocket = "{directory / f"control-{stamp}.sock"}"\n')
     for b in boards:
-        lines.append(
-            f'[[board]]\nname = "{b.name}"\nmodel = "{b.model}"\nlink = "{b.link}"\n'
-            'tcp = "127.0.0.1:0"\n'
-        )
+        lines.append(f'[[board]]\nname = "{b.name}"\nmodel = "{b.model}"\nlink = "{b.link}"\n')
+        if b.tcp:
+            lines.append('tcp = "127.0.0.1:0"\n')
         if b.pty:
-            lines.append(f'pty = "{directory / b.name}"\n')
-    config = directory / f"omsd-{len(boards)}-{time.monotonic_ns()}.toml"
+            lines.append(f'pty = "{directory / f"{b.name}-{stamp}"}"\n')
+    config = directory / f"omsd-{len(boards)}-{stamp}.toml"
     config.write_text("".join(lines))
-    expect = len(boards) + sum(b.pty for b in boards)
-    return Server("omsd", ["--config", str(config)], expect, name="omsd")
+    expect = sum(b.tcp for b in boards) + sum(b.pty for b in boards)
+    return Server(
+        "omsd", ["--config", str(config)], expect, name="omsd", python=python, timeout=timeout
+    )
 
 
 def echo(
@@ -221,13 +344,13 @@ def echo(
     pty: int = 0,
     reply: bytes | None = None,
     every: int = 1,
-    delay: bool = False,
+    mode: str = "plain",
+    python: Python = HERE,
+    timeout: float = TIMEOUT,
 ) -> Server:
-    """Start the baseline server (:mod:`bench.echo`) with ``tcp`` TCP endpoints and ``pty`` ptys
-    in ``directory``. ``reply``/``every``: answer every ``every`` bytes in with ``reply`` (spread
-    in proportion as the bytes come); without ``reply`` it echoes. ``delay``: the done-marker
-    timer of the fidelity benchmark."""
-    args: list[str] = []
+    """Start a baseline server (:mod:`bench.echo`) with ``tcp`` TCP endpoints and ``pty`` ptys
+    in ``directory``, answering in ``mode`` (see there) with ``reply`` every ``every`` bytes."""
+    args = ["--mode", mode]
     for _ in range(tcp):
         args += ["--tcp", "127.0.0.1:0"]
     stamp = time.monotonic_ns()
@@ -237,6 +360,20 @@ def echo(
         path = directory / f"reply-{stamp}.bin"
         path.write_bytes(reply)
         args += ["--reply-file", str(path), "--every", str(every)]
-    if delay:
-        args.append("--delay")
-    return Server("bench.echo", args, tcp + pty, name="echo")
+    return Server(
+        "bench.echo", args, tcp + pty, name=f"echo ({mode})", python=python, timeout=timeout
+    )
+
+
+def floor(directory: Path, reply: bytes, tcp: bool = True, pty: bool = True) -> Server:
+    """Start the floor (:mod:`bench.floor`): blocking reads and writes, a thread per endpoint,
+    no event loop."""
+    stamp = time.monotonic_ns()
+    path = directory / f"reply-{stamp}.bin"
+    path.write_bytes(reply)
+    args = ["--reply-file", str(path)]
+    if tcp:
+        args += ["--tcp", "127.0.0.1:0"]
+    if pty:
+        args += ["--pty", str(directory / f"floor-{stamp}")]
+    return Server("bench.floor", args, tcp + pty, name="floor")

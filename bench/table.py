@@ -37,6 +37,7 @@ class Row:
     target: Target | None = None
     note: str = ""
     compare: bool = True  # False: figure and baseline are themselves ratios; no ratio column
+    skipped: str = ""  # why this row could not be measured here (not a failure: said, not hidden)
 
     @property
     def ratio(self) -> float | None:
@@ -46,6 +47,8 @@ class Row:
 
     @property
     def verdict(self) -> str:
+        if self.skipped:
+            return "not measured"
         if self.figure is None:
             return "NOT MEASURED"
         if self.target is None:
@@ -59,6 +62,11 @@ class Row:
 def failed(name: str, unit: str, target: Target | None, error: BaseException) -> Row:
     """A row whose measurement raised."""
     return Row(name, unit, None, None, target, f"error: {type(error).__name__}: {error}")
+
+
+def skipped(name: str, unit: str, target: Target | None, reason: str) -> Row:
+    """A row that cannot be measured on this machine or in this run, and says why."""
+    return Row(name, unit, None, None, target, f"not measured: {reason}", skipped=reason)
 
 
 def _number(x: float) -> str:

@@ -1,5 +1,13 @@
-"""Throughput: 100,000 commands pipelined through one link, against the baseline moving the same
-bytes.
+"""Throughput: pipelined ``RP`` on one board, and 100,000 mixed commands pipelined through one
+link, each against a baseline moving the same bytes.
+
+:func:`pipelined` (issue 16): ``RP`` written back to back (``RPRPRP...``, 2 bytes a request,
+in writes of :data:`CHUNK` bytes from one thread while another reads) to a PC48-4E on the raw
+link over TCP, until every one of the replies (``<LF><CR>0<LF><CR>``) is in; omsd as users run
+it (default view) and with the view off, against the echo in ``count`` mode, which answers with
+the same 5 bytes for every 2 bytes in (a ``divmod`` per read). Target: >= 500,000 replies/s.
+
+:func:`run`, the mixed stream:
 
 The stream is a realistic mix for a PC48-4E on the raw link, as a polling control program sends
 it: 99 % of the statements are a query of one axis (``AX RP;``, ``AY QA;``, ``AT RE;``: 2
@@ -13,7 +21,7 @@ last byte of the reply to a final ``WY``. omsd holds the client off while the ca
 buffer is full (TCP flow control), as the real card holds the host off with TBE_S.
 
 The baseline is the echo server given omsd's whole reply stream of that same run, released in
-proportion as the command bytes arrive: the same bytes in, the same bytes out.
+proportion as the command bytes arrive (``replay``): the same bytes in, the same bytes out.
 
 Motion floor: queued moves take real time (PC48 §1.2: the card moves in real time; a one- or
 two-step move at VL1000000 AC7000000 lasts 2 of the 2048 ticks per second, as the board engine
@@ -147,7 +155,9 @@ def run(settings: Settings, directory: Path) -> list[Row]:
             elapsed, replies = through_omsd(omsd.tcp(), stream)
             ours.append(elapsed)
             with (
-                procs.echo(directory, tcp=1, reply=replies, every=stream.size) as echo,
+                procs.echo(
+                    directory, tcp=1, reply=replies, every=stream.size, mode="replay"
+                ) as echo,
                 TcpPort(echo.tcp()) as port,
             ):
                 elapsed, echoed = pipeline(port, stream.statements, len(replies))
@@ -163,11 +173,67 @@ def run(settings: Settings, directory: Path) -> list[Row]:
     )
     return [
         Row(
-            "throughput, pipelined commands, raw link",
+            "mixed pipelined commands, raw link: omsd view off / replay echo",
             "cmd/s",
             stream.commands / min(ours),
             stream.commands / min(theirs),
             Target("ratio", ">=", 0.3),
             note,
         )
+    ]
+
+
+CHUNK = 4096
+RP_REPLY = b"\n\r0\n\r"
+
+
+def _pipelined_once(address: tuple[str, int], n: int) -> float:
+    """Seconds for ``n`` pipelined ``RP`` and all their replies, on a fresh connection."""
+    per_chunk = CHUNK // 2
+    chunks = [b"RP" * per_chunk] * (n // per_chunk)
+    if n % per_chunk:
+        chunks.append(b"RP" * (n % per_chunk))
+    with TcpPort(address) as port:
+        port.write(b"RP")  # connected and answering
+        port.read_exact(len(RP_REPLY))
+        elapsed, data = pipeline(port, chunks, n * len(RP_REPLY))
+    if data != RP_REPLY * n:
+        raise RuntimeError(f"{len(data)} bytes of replies, not {n} times {RP_REPLY!r}")
+    return elapsed
+
+
+def pipelined(settings: Settings, directory: Path) -> list[Row]:
+    n = settings.pipeline_replies
+    board = procs.BoardSpec("pipeline", "PC48-4E", "raw")
+    best: dict[str, float] = {}
+    with (
+        procs.omsd([board], directory, view="auto") as users,
+        procs.omsd([board], directory) as off,
+        procs.echo(directory, tcp=1, reply=RP_REPLY, every=2, mode="count") as echo,
+    ):
+        for _ in range(settings.pipeline_runs):
+            for key, server in (("users", users), ("off", off), ("echo", echo)):
+                elapsed = _pipelined_once(server.tcp(), n)
+                best[key] = min(best.get(key, elapsed), elapsed)
+    note = (
+        f"{n:,} RP in writes of {CHUNK} bytes, best of {settings.pipeline_runs};"
+        f" omsd as users run it {best['users']:.2f} s, view off {best['off']:.2f} s,"
+        f" count echo {best['echo']:.2f} s"
+    )
+    return [
+        Row(
+            "pipelined RP, tcp, one board: omsd as users run it / count echo",
+            "replies/s",
+            n / best["users"],
+            n / best["echo"],
+            Target("figure", ">=", 500_000, "replies/s"),
+            note,
+        ),
+        Row(
+            "pipelined RP, tcp, one board: omsd view off / count echo",
+            "replies/s",
+            n / best["off"],
+            n / best["echo"],
+            None,
+        ),
     ]

@@ -8,7 +8,11 @@ its log); ``--config FILE`` describes several. ``--state FILE`` keeps the boards
 personalities; ``omsd commands MODEL`` the commands one understands (:mod:`omsd.commands`);
 ``omsd console`` talks to one board on this terminal without serving it, or runs a command
 file through it (:mod:`omsd.console`); ``omsd ctl`` reaches behind the boards of a running
-daemon (:mod:`omsd.ctl`, which has its own options and exit statuses).
+daemon (:mod:`omsd.ctl`, which has its own options and exit statuses). ``omsd config check
+FILE`` validates a configuration without starting anything, ``omsd config show FILE`` prints it
+with every default filled in, ``omsd config schema`` prints its JSON Schema
+(:mod:`omsd.config.schema`, imported by these and by serving only: ``omsd models`` and ``omsd
+ctl`` stay fast).
 
 Every help text shows each option's default and a few examples (issue 14).
 
@@ -30,8 +34,12 @@ import sys
 
 from omsd import __version__
 from omsd.config import (
+    DEFAULT_EOS,
+    DEFAULT_HOST,
+    DEFAULT_LINK,
     DEFAULT_MODEL,
     DEFAULT_TCP_PORT,
+    DEFAULT_VIEW,
     VIEWS,
     ConfigError,
     from_options,
@@ -54,7 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="omsd",
         usage="omsd [--config FILE | --board MODEL --tcp [HOST:]PORT ...] [OPTIONS]\n"
-        "       omsd {models,commands,console,ctl} ...",
+        "       omsd {models,commands,console,config,ctl} ...",
         description="Virtual Oregon Micro Systems motion controllers (PC48, PC46, VS4,\n"
         "PCIx), served over pty and TCP. With no COMMAND, serve the boards until\n"
         "Ctrl-C or SIGTERM: one line per endpoint on standard output (board, model,\n"
@@ -86,8 +94,9 @@ def _parser() -> argparse.ArgumentParser:
         metavar="[HOST:]PORT",
         action="append",
         default=[],
-        help="serve on TCP; repeatable; PORT 0 picks a free port (default: 127.0.0.1:"
-        f"{DEFAULT_TCP_PORT}, with the default pty). Given without --pty, it replaces the"
+        help="serve on TCP; repeatable; PORT 0 picks a free port (default: "
+        f"{DEFAULT_HOST}:{DEFAULT_TCP_PORT}, with the default pty). Given without --pty, it"
+        " replaces the"
         " defaults: no pty",
     )
     p.add_argument(
@@ -102,12 +111,13 @@ def _parser() -> argparse.ArgumentParser:
         "--link",
         choices=KINDS,
         help="driver: the DOS driver's conventions (markers # @ $ !, end character); raw: the"
-        " board's own stream (default: driver)",
+        f" board's own stream (default: {DEFAULT_LINK})",
     )
     p.add_argument(
         "--eos",
         metavar="HEX",
-        help="the driver link's end-of-string character, like the driver's E:XX (default: 0A)",
+        help="the driver link's end-of-string character, like the driver's E:XX (default:"
+        f" {DEFAULT_EOS:02X})",
     )
     p.add_argument(
         "--terminal",
@@ -122,7 +132,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--view",
         choices=VIEWS,
-        help="the traffic on standard error (default: auto: rich on a terminal, else plain)",
+        help=f"the traffic on standard error (default: {DEFAULT_VIEW}: rich on a terminal, else"
+        " plain)",
     )
     p.add_argument(
         "--control",
@@ -205,10 +216,96 @@ def _parser() -> argparse.ArgumentParser:
         help="at the end of a file or pipe, how long motion still running may take"
         f" (default: {DEFAULT_CONSOLE_WAIT:g} s)",
     )
+    _config_parser(sub)
     # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
     ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
     ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
     return p
+
+
+def _config_parser(sub: argparse._SubParsersAction[_Parser]) -> None:
+    config = sub.add_parser(
+        "config",
+        help="check a configuration file, show it with its defaults, print its JSON Schema",
+        description="The configuration file (config/omsd.toml explains every key): check it\n"
+        "without starting anything, show it as omsd reads it, or print the JSON Schema\n"
+        "that editors check and complete its keys with.",
+        epilog=examples(
+            ("omsd config check config/omsd.toml", "config/omsd.toml: 4 boards, OK"),
+            ("omsd config show config/omsd.toml", "every key, defaults filled in"),
+            ("omsd config schema > omsd.schema.json", "for #:schema ./omsd.schema.json"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    actions = config.add_subparsers(
+        dest="config_command", metavar="ACTION", title="actions", required=True
+    )
+    check = actions.add_parser(
+        "check",
+        help="validate FILE without starting anything",
+        description="Validate FILE as omsd --config FILE would, without starting anything:\n"
+        "one line, FILE: N boards, OK (exit status 0), or the error, FILE:LINE: KEY:\n"
+        "expected ..., got ... (exit status 2).",
+        epilog=examples(
+            ("omsd config check config/omsd.toml", "config/omsd.toml: 4 boards, OK"),
+            ("omsd config check lab.toml || exit 2", "stop a script at a bad file"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    check.add_argument("file", metavar="FILE", help="the TOML configuration file")
+    show = actions.add_parser(
+        "show",
+        help="print FILE as omsd reads it, every default filled in (TOML)",
+        description="Print the configuration FILE gives, as TOML: every key with the value\n"
+        "omsd uses (defaults filled in, paths absolute, every axis of each board). A\n"
+        "password is not shown. Exit status 2 and one line for an invalid FILE.",
+        epilog=examples(
+            ("omsd config show config/omsd.toml", "every key of the four boards"),
+            ("omsd config show lab.toml | grep -A3 'axes.X'", "the X axis of each board"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    show.add_argument("file", metavar="FILE", help="the TOML configuration file")
+    schema = actions.add_parser(
+        "schema",
+        help="print the configuration's JSON Schema (for editors), or its key reference",
+        description="Print the JSON Schema (draft-07) of omsd's configuration files, which\n"
+        "taplo-based editors use to check and complete keys when a file starts with\n"
+        "#:schema ./omsd.schema.json (config/omsd.schema.json is this output); or, with\n"
+        "--format markdown, the reference table of every key (README.md).",
+        epilog=examples(
+            ("omsd config schema > config/omsd.schema.json", "what config/ holds"),
+            ("omsd config schema --format markdown", "the README's key reference"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    schema.add_argument(
+        "--format",
+        choices=("json", "markdown"),
+        default="json",
+        help="json: the JSON Schema; markdown: a table of every key, with its default",
+    )
+
+
+def _config(args: argparse.Namespace) -> int:
+    """``omsd config check|show|schema``: 0, or 2 and one line for an invalid file."""
+    from omsd.config import render
+
+    if args.config_command == "schema":
+        text = render.json_schema_text() if args.format == "json" else render.reference()
+        sys.stdout.write(text)
+        return 0
+    try:
+        config = load_config(args.file)
+    except ConfigError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    if args.config_command == "check":
+        count = len(config.boards)
+        print(f"{args.file}: {count} board{'s' if count != 1 else ''}, OK")
+    else:
+        sys.stdout.write(render.show_text(config))
+    return 0
 
 
 def _seconds(text: str) -> float:
@@ -237,6 +334,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.command == "commands":
         return _commands(args.model, args.grep)
+    if args.command == "config":
+        return _config(args)
     if args.command == "console":
         try:
             model = get_model(args.console_board)

@@ -9,7 +9,7 @@
 Each line: the mnemonic; its operand form (``#`` a number, ``[#]`` one that may be left out,
 ``#,#,…;`` one per axis in the AA/AM modes, ``|`` between the single-axis and the AA forms);
 the range of each operand, from the range tables the interpreter checks
-(:mod:`omsd.protocol.ranges_pc48`, :mod:`omsd.protocol.ranges_pcix`; ``-`` for none); where the
+(:mod:`omsd.dialects.pc48.ranges`, :mod:`omsd.dialects.pcix.ranges`; ``-`` for none); where the
 manual describes it (section and page); what it does, in the words of the manual's command
 summary (:mod:`omsd.models.summary`), with the limits of the personality in brackets (``[AA/AM
 only]``, ``[encoder axes: X, Y]``, ``[servo axes]``...). The listing is what the personality
@@ -26,8 +26,8 @@ import re
 from collections import defaultdict
 from dataclasses import dataclass
 
-from omsd.board.dialect import commands as command_table
-from omsd.board.dialect import ranges as range_table
+from omsd.dialects import commands as command_table
+from omsd.dialects import ranges as range_table
 from omsd.models.spec import NV, CommandSpec, Model
 from omsd.models.summary import (
     OMS_SECTIONS,
@@ -37,7 +37,7 @@ from omsd.models.summary import (
 )
 from omsd.protocol.ranges import OperandRange
 
-#: The MAX-family extension (omsd/board/max_family.py): no PCIx manual page describes them.
+#: The MAX-family extension (omsd/dialects/pcix/max_family.py): no PCIx manual page describes them.
 MAX_FAMILY: dict[str, str] = {
     "PS?": "Report the axis's motor type (=O open loop, =E with encoder, =M servo)",
     "?PS": "Report the axis's motor type, as PS?",
@@ -171,7 +171,7 @@ _MOTORS = {
 
 
 def _motor_fits(model: Model, motor: str, axis: str) -> bool:
-    """As the interpreter decides (omsd.board.interpreter._motor_fits), from the model."""
+    """As the interpreter decides (omsd.dialects.interpreter._motor_fits), from the model."""
     servo = model.is_servo(axis)
     encoder = model.has_encoder(axis)
     return {

@@ -1,8 +1,8 @@
 """Configuration errors as one line that says where: the file, the line, the key path.
 
 This module knows nothing of omsd's keys: it formats a key path (a tuple of keys and list
-indices, the shape of a pydantic or msgspec error's ``loc``) and finds the line of a key in a
-TOML text, so that a schema library can later report through it as :mod:`omsd.config` does.
+indices, the shape of a pydantic error's ``loc``) and finds the line of a key in a TOML text;
+:mod:`omsd.config.wording` turns the schema's errors into :class:`ConfigError` through it.
 
 The line of an error reads::
 

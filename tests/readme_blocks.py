@@ -153,7 +153,9 @@ def blocks(path: Path = README) -> list[Block]:
     return found
 
 
-SUBCOMMANDS = frozenset({"models", "console", "ctl", "commands", "-h", "--help", "--version"})
+SUBCOMMANDS = frozenset(
+    {"models", "console", "ctl", "commands", "config", "-h", "--help", "--version"}
+)
 
 
 def commands(script: str) -> Iterator[list[str]]:

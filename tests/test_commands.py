@@ -8,8 +8,8 @@ import re
 import pytest
 from daemon.process import run_omsd
 
-from omsd.board.dialect import commands as command_table
 from omsd.commands import MAX_FAMILY, Listed, format_listing, listing
+from omsd.dialects import commands as command_table
 from omsd.models import MODELS, get_model
 from omsd.models.summary import OMS_SECTIONS, PC48_SUMMARY, PCIX_SUMMARY, VS4_SUMMARY
 

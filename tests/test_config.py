@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from omsd import cli
-from omsd.board.world import AxisWorld, SwitchType
+from omsd.board import AxisWorld, SwitchType
 from omsd.config import (
     DEFAULT_TCP_PORT,
     BoardConfig,

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from omsd.board import flash
 from omsd.board.harness import Harness
+from omsd.dialects.pcix import flash
 from omsd.files import (
     Refused,
     check_runtime_directory,

@@ -12,10 +12,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from omsd.board.axis import Axis
 from omsd.board.board import Board
-from omsd.board.events import CommandErrorEvent, Event, Output, Reply
-from omsd.board.world import AxisWorld
+from omsd.engine.axis import Axis
+from omsd.engine.events import CommandErrorEvent, Event, Output, Reply
+from omsd.engine.world import AxisWorld
 from omsd.models import get_model
 
 

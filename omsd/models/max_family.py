@@ -33,7 +33,7 @@ Queue cells (the MAX manuals are not in ``shared/``; the choices follow the PCIx
   as the PCIx's ``PP``/``PE`` do ("even in single-axis mode").
 * ``PSO``/``PSE``/``PSM`` are immediate, single-axis commands: they configure the addressed axis
   (``"AX LH PSO;"``); the PCIx's motor types are fixed at the factory, see
-  :mod:`omsd.board.max_family`.
+  :mod:`omsd.dialects.pcix.max_family`.
 """
 
 from __future__ import annotations

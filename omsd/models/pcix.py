@@ -79,7 +79,7 @@ Where the manual contradicts itself (digest §8.2)
   supplied defaults to … 3 steps", so PR may also be sent bare.
 * AC range: the table-independent bound "1 ≤ AC ≤ 8,000,000" (RANGE line) wins over the prose
   "less than 999,999,999"; it is inclusive (every operand range is a row of
-  ``omsd/protocol/ranges_pcix.py``).
+  ``omsd/dialects/pcix/ranges/``).
 
 Motor types (the manual's lost icons, read from the prose)
 ----------------------------------------------------------
@@ -132,7 +132,7 @@ contradicts itself:
   not taken.
 * Velocity: VL "1 ≤ VL ≤ 1044000"; JG "-1,043,999 ≤ JG ≤ 1,043,999" (``max_jog_velocity``).
 * Acceleration: "RANGE: 1 ≤ AC ≤ 8,000,000", the row the interpreter checks
-  (``omsd/protocol/ranges_pcix.py``). ``Model.max_acceleration``, described as an exclusive
+  (``omsd/dialects/pcix/ranges/``). ``Model.max_acceleration``, described as an exclusive
   bound, is the next float above 8,000,000.
 * Defaults: VL 200,000 ("The factory default is 200,000 steps per second"; §2.8's prose
   "100,000" is not taken), AC 2,000,000, CV 1000. Position range ±33,554,431 (LP and SO; the

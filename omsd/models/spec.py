@@ -173,7 +173,7 @@ class Model:
     firmware: str
     wy_format: str  # str.format with model, family, firmware, axes (count), serial
     # The limits below describe the product; the interpreter checks operands against the range
-    # tables (omsd/protocol/ranges_pc48.py, ranges_pcix.py), which tests hold these to.
+    # tables (omsd/dialects/pc48/ranges/, omsd/dialects/pcix/ranges/), which tests hold these to.
     max_velocity: float
     max_acceleration: float  # exclusive upper bound
     default_velocity: float

@@ -1,7 +1,7 @@
 """Operand ranges as data: one row per command operand, each with the manual's words.
 
-The dialect tables (:mod:`omsd.protocol.ranges_pc48` for the PC48, PC46 and VS4,
-:mod:`omsd.protocol.ranges_pcix` for the PCIx) hold an :class:`OperandRange` for every operand of
+The dialect tables (:mod:`omsd.dialects.pc48.ranges` for the PC48, PC46 and VS4,
+:mod:`omsd.dialects.pcix.ranges` for the PCIx) hold an :class:`OperandRange` for every operand of
 every command that takes a number; the interpreter asks them (``Interpreter.check`` and
 ``Interpreter.integer``) instead of carrying bounds of its own, so the table is the one place a
 range is stated. A value outside its row sets the command-error flag with

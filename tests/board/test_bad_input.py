@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from omsd.board.board import Board
 from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, DON_S
+from omsd.engine.registers import CMD_S, DON_S
 from omsd.models import get_model
 from omsd.models.pc48 import PC48_COMMANDS
 from omsd.models.pcix import PCIX_COMMANDS

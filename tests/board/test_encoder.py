@@ -7,8 +7,8 @@ import pytest
 
 from omsd.board.events import SlipEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import DON_S, ENC_S
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import DON_S, ENC_S
 
 
 def test_encoder_follows_the_motor_one_to_one(pc48e: Harness) -> None:

@@ -23,7 +23,7 @@ import pytest
 
 from omsd.board.events import CommandErrorEvent, ErrorKind
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, INIT
+from omsd.engine.registers import CMD_S, INIT
 from omsd.protocol.lexer import MAX_FIELD, MAX_FIELDS, MAX_TEXT, Command, Garbage, Lexer, Syntax
 from omsd.protocol.operands import OperandError, check_range, parse_field, parse_number, truncate
 

@@ -14,15 +14,14 @@ PROFILES", §6.7–§6.11) and the design decisions of the project, never read b
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
-from omsd.board.axis import Motion
 from omsd.board.events import DoneEvent, LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import DON_S, OVRT
 from omsd.board.world import AxisWorld
+from omsd.engine.axis import Motion
+from omsd.engine.registers import DON_S, OVRT
 
 RATE = 2048  # PC48 §1.2: "calculating the optimum velocity 2048 times each second"
 SAMPLE = 1.0 / RATE
@@ -851,30 +850,29 @@ def _count_deadlines(h: Harness, until: float) -> int:
 
 def test_ten_minute_move_is_simulated_in_a_few_deadlines():
     """VL1000 AC10000 MR600000: 600.1 s; ends on tick ceil(600.1 * 2048) after a handful of
-    deadlines, not 1.2 million samples."""
+    deadlines, not 1.2 million samples (how long that takes is measured by ``python -m bench``,
+    the interpreter benchmark)."""
     h = Harness("PC48-4")
     h.send("VL1000 AC10000 MR600000 GO ID")
     end = first_tick(600.1)
     assert h.board.next_deadline() == end
-    start = time.perf_counter()
     n = _count_deadlines(h, 700.0)
-    assert time.perf_counter() - start < 1.0
     assert n <= 5
     assert h.position() == 600_000
     assert [e.time for e in h.events() if isinstance(e, DoneEvent)] == [end]
 
 
 def test_ten_minute_jog_is_simulated_fast():
-    """JG10000 for ten minutes: x = 10000 t - 50 (AC 1e6: 10 ms ramp); ST ramps 50 steps."""
+    """JG10000 for ten minutes: x = 10000 t - 50 (AC 1e6: 10 ms ramp); ST ramps 50 steps; a
+    handful of deadlines each, not a sample each (timed by ``python -m bench``)."""
     h = Harness("PC48-4")
     h.send("JG10000\r")
-    start = time.perf_counter()
-    _count_deadlines(h, 600.0)
+    jogging = _count_deadlines(h, 600.0)
     assert h.position() == 5_999_950
     assert rp(h, "RV") == 10_000
     h.send("ST")
-    _count_deadlines(h, 700.0)
-    assert time.perf_counter() - start < 1.0
+    stopping = _count_deadlines(h, 700.0)
+    assert jogging <= 5 and stopping <= 5, (jogging, stopping)
     assert h.position() == 6_000_000
     assert h.board.next_deadline() is None
 

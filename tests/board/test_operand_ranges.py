@@ -1,5 +1,5 @@
-"""Operand ranges, generated from the range tables (:mod:`omsd.protocol.ranges_pc48`,
-:mod:`omsd.protocol.ranges_pcix`).
+"""Operand ranges, generated from the range tables (:mod:`omsd.dialects.pc48.ranges`,
+:mod:`omsd.dialects.pcix.ranges`).
 
 For every row, on a model of every family the row applies to: a value inside the range, both
 edges (the first value inside an exclusive edge) and the values just outside are sent to a
@@ -21,13 +21,13 @@ from decimal import Decimal
 
 import pytest
 
-from omsd.board import dialect
+from omsd import dialects as dialect
 from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
+from omsd.dialects.pc48.ranges import PC48_RANGES
+from omsd.dialects.pcix.ranges import PCIX_RANGES
 from omsd.models import MODELS
 from omsd.protocol.ranges import OperandRange, RangeTable
-from omsd.protocol.ranges_pc48 import PC48_RANGES
-from omsd.protocol.ranges_pcix import PCIX_RANGES
 
 D = Decimal
 TABLES: dict[str, RangeTable] = {"oms": PC48_RANGES, "pcix": PCIX_RANGES}
@@ -110,7 +110,7 @@ def contour(h: Harness) -> object:
 
 
 def contour_arc(x: Decimal, y: Decimal, angle: Decimal) -> object:
-    from omsd.board.contour import Arc
+    from omsd.engine.contour import Arc
 
     return ((0.0, 0.0), [Arc((float(int(x)), float(int(y))), float(angle))])
 
@@ -619,7 +619,7 @@ def test_the_tables_are_self_contained_data() -> None:
     import ast
     import importlib.util
 
-    for name in ("omsd.protocol.ranges", "omsd.protocol.ranges_pc48", "omsd.protocol.ranges_pcix"):
+    for name in ("omsd.protocol.ranges", "omsd.dialects.pc48.ranges", "omsd.dialects.pcix.ranges"):
         spec = importlib.util.find_spec(name)
         assert spec is not None and spec.origin is not None
         with open(spec.origin, encoding="utf-8") as f:

@@ -34,10 +34,10 @@ from dataclasses import dataclass
 
 import pytest
 
-from omsd.board.axis import SERVO_CHECK
 from omsd.board.events import ErrorKind, ServoTripEvent
 from omsd.board.harness import Harness
-from omsd.board.servo import RUNAWAY_ERROR, SERVO_RATE, VOLTS_PER_COUNT
+from omsd.engine.axis import SERVO_CHECK
+from omsd.engine.servo import RUNAWAY_ERROR, SERVO_RATE, VOLTS_PER_COUNT
 
 T = 1.0 / SERVO_RATE
 HARD = "AC8000000;VL1000000;"  # the fastest ramp the manual allows

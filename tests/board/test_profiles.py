@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omsd.board import profiles as pf
-from omsd.board.profiles import Cosine, Poly, RampKind, RampShape, Trajectory
+from omsd.engine import profiles as pf
+from omsd.engine.profiles import Cosine, Poly, RampKind, RampShape, Trajectory
 
 LINEAR = RampShape(RampKind.LINEAR)
 COSINE = RampShape(RampKind.COSINE)

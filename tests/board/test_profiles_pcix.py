@@ -19,8 +19,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omsd.board import profiles as pf
-from omsd.board.profiles import RampKind, RampShape, SCurve, Trajectory
+from omsd.engine import profiles as pf
+from omsd.engine.profiles import RampKind, RampShape, SCurve, Trajectory
 
 VL, AC = 100_000.0, 1_000_000.0
 

@@ -10,7 +10,14 @@ import pytest
 import omsd
 
 ROOT = pathlib.Path(omsd.__file__).parent
-PURE = sorted([*(ROOT / "board").glob("*.py"), *(ROOT / "protocol").glob("*.py")])
+PURE = sorted(
+    [
+        *(ROOT / "engine").glob("*.py"),
+        *(ROOT / "dialects").rglob("*.py"),
+        *(ROOT / "board").glob("*.py"),
+        *(ROOT / "protocol").glob("*.py"),
+    ]
+)
 FORBIDDEN_MODULES = {"asyncio", "time", "socket", "select", "selectors", "threading", "os", "io"}
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, DON_S, TBE_S
+from omsd.engine.registers import CMD_S, DON_S, TBE_S
 
 RAMPS = {"linear": "PF", "parabolic": "PN;", "cosine": "CN"}
 RAMP_INDEX = {"linear": 0, "parabolic": 1, "cosine": 2}

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from omsd.board.events import CommandErrorEvent, DoneEvent, LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, DON_E, DON_S, INIT, IRQ_E, IRQ_S, OVRT, TBE_S
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import CMD_S, DON_E, DON_S, INIT, IRQ_E, IRQ_S, OVRT, TBE_S
 
 
 def test_idle_status_is_transmit_buffer_empty_only(pc48: Harness) -> None:

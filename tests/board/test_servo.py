@@ -13,9 +13,9 @@ from dataclasses import replace
 
 import pytest
 
-from omsd.board import servo
-from omsd.board.profiles import LINEAR, Trajectory, move_pieces
-from omsd.board.servo import (
+from omsd.engine import servo
+from omsd.engine.profiles import LINEAR, Trajectory, move_pieces
+from omsd.engine.servo import (
     RUNAWAY_ERROR,
     Plant,
     ServoGains,

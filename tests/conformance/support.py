@@ -13,11 +13,11 @@ import math
 from collections.abc import Callable, Iterable
 from typing import cast
 
-from omsd.board.axis import Motion
 from omsd.board.board import Board
 from omsd.board.events import DoneEvent, ErrorKind, Event
 from omsd.board.harness import Harness
 from omsd.board.world import AxisWorld
+from omsd.engine.axis import Motion
 from omsd.models import get_model, variant
 
 PC48_RATE = 2048  # PC48 sample ticks per second (§1.2, §8.2)

@@ -8,10 +8,10 @@ import re
 
 import pytest
 
-from omsd.board.commands import HANDLERS
 from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S
+from omsd.dialects.pc48 import TABLE as HANDLERS
+from omsd.engine.registers import CMD_S
 from omsd.models import MODELS
 from omsd.models.pc48 import PC48_COMMANDS
 from omsd.models.spec import Kind

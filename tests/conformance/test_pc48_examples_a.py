@@ -21,8 +21,8 @@ import pytest
 
 from omsd.board.events import CommandErrorEvent, ErrorKind, LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, INIT, OVRT
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import CMD_S, INIT, OVRT
 
 from .support import (
     done_events,

@@ -34,7 +34,7 @@ import pytest
 from omsd.board.board import Board
 from omsd.board.events import ErrorKind, SlipEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import ENC_S
+from omsd.engine.registers import ENC_S
 from omsd.models import get_model
 
 from . import support

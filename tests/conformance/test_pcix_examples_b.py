@@ -32,8 +32,8 @@ import pytest
 
 from omsd.board.events import LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import DON_S
 from omsd.board.world import AxisWorld, LimitWiring
+from omsd.engine.registers import DON_S
 
 from .pcix import AC0, QUEUE, RATE, end_tick, linear_move_time, quiet, reply, tick, typed
 from .support import NO_HOME, done_events, moving, velocity

@@ -26,8 +26,8 @@ import pytest
 from omsd.board.board import Board
 from omsd.board.events import DoneEvent, ErrorKind, LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, DON_S, IBF_S, INIT, IRQ_S, TBE_S
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import CMD_S, DON_S, IBF_S, INIT, IRQ_S, TBE_S
 from omsd.models import get_model, variant
 from omsd.models.pc48 import PC48_COMMANDS
 from omsd.models.vs4 import VS4_COMMANDS

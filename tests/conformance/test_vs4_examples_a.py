@@ -24,8 +24,8 @@ import pytest
 
 from omsd.board.events import ErrorKind, LimitEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import CMD_S, DON_S, INIT, OVRT
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import CMD_S, DON_S, INIT, OVRT
 
 from . import support
 from .support import done_events, enter, no_encoder_vs4, number, numbers, soft_stop_bounds

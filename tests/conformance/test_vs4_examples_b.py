@@ -21,8 +21,8 @@ import math
 from omsd.board.board import Board
 from omsd.board.events import ErrorKind, LimitEvent, SlipEvent
 from omsd.board.harness import Harness
-from omsd.board.registers import DON_S, ENC_S, INIT, OVRT
 from omsd.board.world import AxisWorld
+from omsd.engine.registers import DON_S, ENC_S, INIT, OVRT
 from omsd.models import get_model, variant
 
 from . import support

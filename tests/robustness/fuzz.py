@@ -47,9 +47,9 @@ from dataclasses import dataclass, field
 from types import FrameType
 
 from omsd.board import Board, CommandErrorEvent, DoneEvent, LimitEvent, Reply, SlipEvent
-from omsd.board.axis import Motion
 from omsd.board.events import Output
-from omsd.board.registers import CMD_S
+from omsd.engine.axis import Motion
+from omsd.engine.registers import CMD_S
 from omsd.link import DriverLink, RawLink
 from omsd.link.base import message_first
 from omsd.models import MODELS, Model

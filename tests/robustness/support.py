@@ -1,8 +1,9 @@
 """Helpers of the daemon-level robustness tests: what a process holds (/proc), round trips,
 misbehaving clients.
 
-Nothing here asserts a time: round trips are measured and returned, and the tests compare them
-with generous bounds (a reply normally takes well under a millisecond; the bounds are hundreds).
+Nothing here asserts a time, and neither do the tests (issue 16): round trips are measured,
+returned and printed; the tests check order, counts and bounded memory, and ``python -m bench``
+measures the times (the isolation and churn rows).
 """
 
 from __future__ import annotations
@@ -21,10 +22,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from daemon.process import TIMEOUT, Conn, Daemon, wait_for
-
-RP_BOUND = 0.5
-"""Seconds: the generous bound on one ``RP`` round trip of a board whose client behaves while
-another board's client misbehaves (issue 7: "measure but don't assert tight times")."""
 
 
 def fd_count(pid: int) -> int:

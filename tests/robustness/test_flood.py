@@ -10,8 +10,9 @@ checked:
   board takes bytes as its input buffer frees, as TBE_S would), and what it does not read is
   capped (``MAX_PENDING_OUTPUT`` of ``omsd/transport/tcp.py``, ``MAX_BACKLOG`` of
   ``omsd/transport/pty.py``) and then dropped;
-* every round trip of the good client stays under :data:`support.RP_BOUND` (half a second,
-  against well under a millisecond normally) and each answer is right;
+* the good client is answered throughout, each answer right (its own ``-777``), at least
+  :data:`AT_LEAST` times during the abuse: order and counts, never a time (how long the answers
+  take meanwhile is measured by ``python -m bench``, the isolation rows);
 * the abused board itself is still usable afterwards by a client that behaves.
 
 Short pass: :data:`FLOOD_SECONDS` [0] seconds of flood (megabytes) and a few seconds of slow
@@ -30,7 +31,6 @@ from daemon.process import TIMEOUT, Conn, Daemon, Omsd
 
 from .conftest import Scale
 from .support import (
-    RP_BOUND,
     Abuser,
     RoundTrips,
     flood_pty,
@@ -48,6 +48,8 @@ RSS_BOUND_KIB = 8 * 1024
 """Resident memory the daemon may gain while abused (KiB): asyncio's reads (256 KiB each), the
 output caps, allocator slack. Without flow control and the caps it would gain what the flood
 wrote (megabytes in the short pass, tens of megabytes in the long one)."""
+AT_LEAST = 10
+"""Answers the good client gets while the other board is abused."""
 
 
 def start(omsd: Omsd, pty: Path | None = None) -> Daemon:
@@ -73,7 +75,7 @@ def abuse(daemon: Daemon, abuser: Abuser, good: Conn, seconds: float) -> tuple[R
     abuser.start()
     try:
         started = time.monotonic()
-        while time.monotonic() - started < seconds:
+        while time.monotonic() - started < seconds or len(trips.samples) < AT_LEAST:
             begin = time.perf_counter()
             reply = good.ask(b"AY RP")
             trips.samples.append(time.perf_counter() - begin)
@@ -103,7 +105,7 @@ def still_usable(daemon: Daemon) -> None:
 def report(label: str, trips: RoundTrips, grown: int, sent: int) -> None:
     print(f"{label}: {sent / MEGABYTE:.1f} MiB written; good board {trips}; RSS {grown:+} KiB")
     assert grown < RSS_BOUND_KIB, f"{label}: the daemon's memory grew by {grown} KiB"
-    assert trips.worst < RP_BOUND, f"{label}: the good board was slowed: {trips}"
+    assert len(trips.samples) >= AT_LEAST, f"{label}: the good board was answered {trips}"
 
 
 def test_tcp_flood_that_never_reads(omsd: Omsd, scale: Scale) -> None:

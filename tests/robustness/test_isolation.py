@@ -12,10 +12,13 @@ round trips are measured before the abuse (the baseline) and while the abused bo
 * churns (connects, writes half a command, hangs up, sometimes with a reset, again and again);
 * floods its pty.
 
-Bounds, generous on purpose (a reply normally takes a fraction of a millisecond; these tests
-must not fail on a loaded CI machine, only on a daemon that lets one client hold the loop):
-every round trip under :data:`support.RP_BOUND` (0.5 s), and the median no more than
-:data:`MEDIAN_SLACK` above the baseline's. The measured figures are printed (``pytest -s``).
+Checked: order and counts, never a time (issue 16: benchmarks measure, tests do not assert
+timings). The good client is answered, rightly, throughout the abuse (every one of its round
+trips, before, during and after, gets its own ``-777``: a daemon held by the abuser fails them
+by the client's timeout), at least :data:`AT_LEAST` times while the abuse goes on, and the
+abuser did get going. How long the good board's replies take meanwhile is measured by
+``python -m bench`` (the isolation rows, against the bound this test used to assert); the
+figures seen here are printed (``pytest -s``).
 
 Short pass: :data:`SECONDS` [0] of abuse each; long (``--long`` / ``OMSD_LONG=1``): a minute.
 """
@@ -31,7 +34,6 @@ from daemon.process import Daemon, Omsd
 
 from .conftest import Scale
 from .support import (
-    RP_BOUND,
     Abuser,
     RoundTrips,
     churn_tcp,
@@ -45,8 +47,8 @@ from .support import (
 
 SECONDS = (2.0, 60.0)
 BASELINE = 200
-MEDIAN_SLACK = 0.05
-"""Seconds the median round trip may rise over the baseline's while the other board is abused."""
+AT_LEAST = 10
+"""Round trips of the good client while the other board is abused (one batch of ten)."""
 
 ABUSES: dict[str, Callable[[Daemon, Path], Callable[[Abuser], None]]] = {
     "flood": lambda d, pty: flood_tcp(d.tcp("abused"), b"AY RP "),
@@ -83,7 +85,7 @@ def test_a_misbehaving_client_does_not_delay_another_board(
         try:
             seconds = scale(*SECONDS)
             started = time.monotonic()
-            while time.monotonic() - started < seconds and not during.worst >= RP_BOUND:
+            while time.monotonic() - started < seconds or len(during.samples) < AT_LEAST:
                 during.samples += round_trips(good, 10).samples
                 assert daemon.running, daemon.stderr
         finally:
@@ -91,6 +93,5 @@ def test_a_misbehaving_client_does_not_delay_another_board(
         after = round_trips(good, BASELINE)
     print(f"{abuse} ({link}): before {before}; during {during}; after {after}")
     assert abuser.sent > 0, "the abuser never got going"
-    assert during.worst < RP_BOUND, f"{abuse}: the good board was held up: {during}"
-    assert during.median < before.median + MEDIAN_SLACK, f"{abuse}: {during} vs {before}"
-    assert after.worst < RP_BOUND, f"{abuse}: the good board stayed slow: {after}"
+    assert len(before.samples) == len(after.samples) == BASELINE
+    assert len(during.samples) >= AT_LEAST, f"{abuse}: {during}"

@@ -1,0 +1,333 @@
+"""The daemon's configuration: a TOML file, or the single-board command line, made into frozen
+dataclasses.
+
+Every key is described once, in :mod:`omsd.config.schema` (pydantic models): its type, default,
+meaning and what an error says (:mod:`omsd.config.wording`, :mod:`omsd.config.values`).
+Validation (:mod:`omsd.config.reading`), the single-board command line, ``omsd config schema``
+(the JSON Schema, ``config/omsd.schema.json``), ``omsd config show`` and the README's reference
+table (:mod:`omsd.config.render`) are derived from it. This module is what the rest of omsd
+uses: the frozen dataclasses below, the defaults they share with the schema, and
+:func:`load_config` and :func:`from_options`, which import the schema only when called
+(pydantic takes ~0.1 s to import; ``omsd models`` and ``omsd ctl`` never pay for it).
+
+A file describes one or more boards, each with its own endpoints, link settings and simulated
+world (``config/omsd.toml`` shows and explains every key, README "Configuration reference" lists
+them)::
+
+    [log]
+    file = "/var/log/omsd/traffic.jsonl"   # JSON-lines traffic log (relative: to this file)
+    view = "auto"                          # auto | rich | plain | off
+
+    [[board]]
+    name = "xy-stage"          # [A-Za-z0-9_.-]+, default board1, board2, ...
+    model = "PC48-4E"          # any personality of `omsd models`, case-insensitive
+    link = "driver"            # driver | raw
+    eos = "0A"                 # the driver's E:XX, hex string, or an integer character code
+    tcp = ["127.0.0.1:7001"]   # "[HOST:]PORT" or PORT, {address, terminal}, or a list of them
+    pty = "/run/omsd/xy"       # path, true (the default link), {link, group, mode, terminal},
+                               # or a list
+
+    [board.axes.X]             # any field of omsd.board.AxisWorld
+    negative_limit = -50000
+
+Every error is a :class:`ConfigError` whose text is one line, ``<file>:<line>: <key path>:
+expected <what>, got <value>`` (``omsd.toml:14: [board "xy"] axes.X.positive_limit: expected a
+number (motor steps), got "5k"``), or for a command-line option ``--tcp: expected [HOST:]PORT
+with PORT 0..65535, got "abc"`` (:mod:`omsd.config_errors` formats and locates).
+
+Choices where the issue is silent:
+
+* Relative paths in a file are relative to the file's directory (the daemon may run from ``/``);
+  on the command line, to the working directory. ``~`` is expanded. Paths are made absolute.
+* A TCP endpoint without a host binds 127.0.0.1. ``:7001`` is refused as ambiguous (some tools
+  read it as "every interface"): write ``0.0.0.0:7001``. IPv6 addresses go in brackets,
+  ``[::1]:7001``. Port 0 asks the OS for a free port, and may appear any number of times.
+* Two endpoints conflict if they are the same TCP address and port, a wildcard (``0.0.0.0``,
+  ``::``) and an address of its family on the same port, or the same pty link.
+* A board in a file needs at least one endpoint; the command line falls back to the defaults
+  (TCP 127.0.0.1:7048 and a pty at :func:`default_pty_link`) when neither --tcp nor --pty is
+  given.
+* Encoder settings on an axis without an encoder are an error, as is a limit or home window that
+  is empty (negative_limit >= positive_limit, home_low >= home_high).
+* The boards' flash memory (a PCIx's AP power-up defaults and permanent macros, "stored in
+  non-volatile flash RAM") is one state file for the whole daemon, ``[state] file``, with a
+  section per board name (:mod:`omsd.statefile`); ``--state FILE`` gives or overrides it. None
+  configured: flash lasts as long as the daemon runs. It may not be the traffic log's file.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import TYPE_CHECKING
+
+from omsd.config_errors import ConfigError
+from omsd.models import get_model, variant
+
+if TYPE_CHECKING:
+    from omsd.board import AxisWorld
+    from omsd.models.spec import Model
+
+# -- the defaults: the schema (omsd.config.schema) gives them to its keys, the objects below
+# to their fields, the command line's help quotes them ---------------------------------------
+
+DEFAULT_TCP_PORT = 7048
+DEFAULT_HOST = "127.0.0.1"
+DEFAULT_MODEL = "PC48-4E"
+DEFAULT_BOARD_NAME = "board1"
+LINKS = ("driver", "raw")
+DEFAULT_LINK = "driver"
+DEFAULT_EOS = 0x0A  # §7.3.2: "The default value is an LF."
+DEFAULT_BUFFER_SIZE = 0x0100  # §7.3.2: "The default value is 0100 hex (256 decimal)."
+BUFFER_SIZE_MIN = 0x0010  # §7.3.2: "from 0010 to 7fff (16 to 32767 decimal)"
+BUFFER_SIZE_MAX = 0x7FFF
+SECOND_CLIENT_POLICIES = ("takeover", "refuse")
+DEFAULT_SECOND_CLIENT = "takeover"
+#: How long a TCP client that has shut down its sending side (``nc -N``, ``shutdown(SHUT_WR)``)
+#: is kept open for the answers, done markers and limits its commands are yet to produce.
+DEFAULT_LINGER = 60.0
+MAX_LINGER = 3600.0
+DEFAULT_PTY_MODE = 0o660
+VIEWS = ("auto", "rich", "plain", "off")
+DEFAULT_VIEW = "auto"
+CONTROL_SOCKET_NAME = "control.sock"
+MQTT_PORT = 1883  # IANA "mqtt"
+MQTTS_PORT = 8883  # IANA "secure-mqtt"
+DEFAULT_MQTT_PREFIX = "omsd"
+DEFAULT_KEEPALIVE = 60
+DEFAULT_STATE_RATE = 10.0
+MAX_STATE_RATE = 1000.0  # state publications per second per board, at most
+
+
+# -- the configuration --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TcpEndpoint:
+    """A listening TCP socket. ``port`` 0 lets the OS choose a free port."""
+
+    host: str = DEFAULT_HOST
+    port: int = DEFAULT_TCP_PORT
+    terminal: bool = False  # for a person at a terminal program (omsd.transport.terminal)
+
+    def __str__(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"{host}:{self.port}"
+
+
+@dataclass(frozen=True)
+class PtyEndpoint:
+    """A pseudo-terminal reached through the stable symlink ``link``."""
+
+    link: Path
+    group: str | None = None  # group to chown the pty device to; None: leave it
+    mode: int = DEFAULT_PTY_MODE  # permissions of the pty device
+    terminal: bool = False  # for a person at a terminal program (omsd.transport.terminal)
+
+    def __str__(self) -> str:
+        return str(self.link)
+
+
+def _no_world() -> Mapping[str, AxisWorld]:
+    return MappingProxyType({})
+
+
+def _no_inputs() -> Mapping[int, bool]:
+    return MappingProxyType({})
+
+
+@dataclass(frozen=True)
+class BoardConfig:
+    """One emulated board and how it is served."""
+
+    name: str
+    model: str = DEFAULT_MODEL  # canonical name, a key of omsd.models.MODELS
+    link: str = DEFAULT_LINK  # "driver" or "raw"
+    eos: int = DEFAULT_EOS  # the driver's E:XX
+    buffer_size: int = DEFAULT_BUFFER_SIZE  # the driver's B:XXXX
+    tcp: tuple[TcpEndpoint, ...] = ()
+    pty: tuple[PtyEndpoint, ...] = ()
+    second_client: str = DEFAULT_SECOND_CLIENT  # a new TCP client replaces the connected one
+    linger: float = DEFAULT_LINGER  # s a half-closed TCP client waits for its answers
+    world: Mapping[str, AxisWorld] = field(default_factory=_no_world)  # axis letter -> world
+    inputs: Mapping[int, bool] = field(default_factory=_no_inputs)  # input bit -> high?
+    encoders: str | None = None  # axes fitted with encoders, if not the model's (VS4 option)
+    serial: str | None = None  # serial number WY reports (VS4), if not the model's
+    firmware: str | None = None  # firmware revision WY reports, if not the model's
+    max_queries: bool | None = None  # PCIx: answer the MAX-family queries (default on)
+
+    def personality(self) -> Model:
+        """The model as fitted and labelled on this board."""
+        return variant(
+            get_model(self.model), self.encoders, self.serial, self.firmware, self.max_queries
+        )
+
+    def __post_init__(self) -> None:
+        # Frozen all the way down, whatever the caller passed.
+        object.__setattr__(self, "tcp", tuple(self.tcp))
+        object.__setattr__(self, "pty", tuple(self.pty))
+        object.__setattr__(self, "world", MappingProxyType(dict(self.world)))
+        object.__setattr__(self, "inputs", MappingProxyType(dict(self.inputs)))
+
+
+@dataclass(frozen=True)
+class LogConfig:
+    file: Path | None = None  # JSON-lines traffic log
+    view: str = DEFAULT_VIEW  # "auto", "rich", "plain" or "off"
+    group: str | None = None  # a new log file is 0640 in this group; None: 0600
+
+
+@dataclass(frozen=True)
+class DaemonConfig:
+    boards: tuple[BoardConfig, ...]
+    log: LogConfig = field(default_factory=LogConfig)
+    source: str = "built-in default"  # "built-in default", "command line", or the file path
+    state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
+    control: ControlConfig = field(default_factory=lambda: ControlConfig())
+    mqtt: MqttConfig | None = None  # the MQTT bridge (omsd.mqtt); None: off
+    state_group: str | None = None  # the state file is 0640 in this group; None: 0600
+
+
+@dataclass(frozen=True)
+class ControlConfig:
+    """The control endpoint (omsd.control): a Unix socket, owner-only, at ``socket`` (``None``:
+    none); ``explicit`` when the path was configured (then a path in use is a start-up error;
+    the default path in use only costs a warning: another omsd of this user has it); ``tcp``
+    only if configured (no network exposure by default)."""
+
+    socket: Path | None = field(default_factory=lambda: default_pty_link(CONTROL_SOCKET_NAME))
+    explicit: bool = False
+    tcp: TcpEndpoint | None = None
+    group: str | None = None  # the socket is 0660 in this group; None: 0600
+
+
+@dataclass(frozen=True)
+class MqttConfig:
+    """The MQTT bridge (:mod:`omsd.mqtt`), on only when ``[mqtt]`` is given.
+
+    ``tls`` is ``False`` (plain TCP), ``True`` (TLS, the system's CA certificates) or the path of
+    a CA file to verify the broker with. ``port`` defaults to 1883, or 8883 with TLS (the
+    IANA ports "mqtt" and "secure-mqtt"). ``client_id`` ``None`` lets the client library make
+    one up. ``state_rate`` bounds the retained state publications per second per board while
+    its axes move; ``traffic`` turns the traffic topic off.
+    """
+
+    host: str
+    port: int = MQTT_PORT
+    username: str | None = None
+    password: str | None = None
+    tls: bool | Path = False
+    client_id: str | None = None
+    prefix: str = DEFAULT_MQTT_PREFIX
+    keepalive: int = DEFAULT_KEEPALIVE
+    state_rate: float = DEFAULT_STATE_RATE
+    traffic: bool = True
+
+
+# -- places -------------------------------------------------------------------------------------
+
+
+def runtime_directory() -> Path:
+    """The daemon's runtime directory, where the default pty links and the control socket go:
+    ``$RUNTIME_DIRECTORY`` under a systemd unit with ``RuntimeDirectory=``, else
+    ``$XDG_RUNTIME_DIR/omsd``, else ``/tmp/omsd-<uid>``. The daemon creates it (mode 0700) and
+    refuses one that another user could change (:func:`omsd.files.check_runtime_directory`)."""
+    runtime = os.environ.get("RUNTIME_DIRECTORY", "").split(":")[0]
+    if os.path.isabs(runtime):
+        return Path(runtime)
+    xdg = os.environ.get("XDG_RUNTIME_DIR", "")
+    if os.path.isabs(xdg):
+        return Path(xdg) / "omsd"
+    return Path(f"/tmp/omsd-{os.getuid()}")
+
+
+def default_pty_link(name: str) -> Path:
+    """Where a board's pty link goes when none is configured: ``<name>`` in the
+    :func:`runtime_directory`. The daemon creates the directory."""
+    return runtime_directory() / name
+
+
+# -- reading a configuration (the schema is imported here, when it is needed) -------------------
+
+
+def load_config(path: str | os.PathLike[str]) -> DaemonConfig:
+    """Read and validate a TOML configuration file."""
+    from omsd.config import reading
+
+    return reading.load(path)
+
+
+def from_options(
+    board: str | None,
+    tcp: list[str],
+    pty: list[str],
+    link: str | None,
+    eos: str | None,
+    log: str | None,
+    terminal: bool = False,
+) -> DaemonConfig:
+    """The single-board form of the command line: ``--board MODEL --tcp [HOST:]PORT ...
+    --pty PATH ... --link driver|raw --eos HEX --log FILE``, validated by the schema as the
+    one board of a file would be (paths relative to the working directory). Without --tcp and
+    --pty, the default endpoints; with either, only what is given. ``--terminal`` puts the ptys
+    in terminal mode (TCP stays exact: terminal TCP endpoints are for a configuration file)."""
+    from omsd.config import reading
+
+    return reading.single_board(board, tcp, pty, link, eos, log, terminal, "command line")
+
+
+def default_config() -> DaemonConfig:
+    """``omsd`` with no arguments: one PC48-4E on TCP 127.0.0.1:7048 and on a pty."""
+    from omsd.config import reading
+
+    return reading.single_board(None, [], [], None, None, None, False, "built-in default")
+
+
+def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConfig:
+    """``--control PATH`` (the control socket) or ``--control off``."""
+    if control is None:
+        return config
+    if control == "off":
+        return replace(config, control=replace(config.control, socket=None, explicit=True))
+    from omsd.config import reading
+
+    path = reading.option_path("--control", control)
+    return replace(config, control=replace(config.control, socket=path, explicit=True))
+
+
+def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
+    """``--state FILE`` on either form of the command line: the state file (relative to the
+    working directory), in place of a file's ``[state] file``. ``None``: the configuration as
+    it is."""
+    if state is None:
+        return config
+    from omsd.config import reading
+
+    path = reading.option_path("--state", state)
+    if path == config.log.file:
+        raise reading.not_the_log("--state", path)
+    return replace(config, state=path)
+
+
+__all__ = [
+    "DEFAULT_MODEL",
+    "DEFAULT_TCP_PORT",
+    "BoardConfig",
+    "ConfigError",
+    "ControlConfig",
+    "DaemonConfig",
+    "LogConfig",
+    "MqttConfig",
+    "PtyEndpoint",
+    "TcpEndpoint",
+    "default_config",
+    "default_pty_link",
+    "from_options",
+    "load_config",
+    "runtime_directory",
+    "with_control_option",
+    "with_state_option",
+]

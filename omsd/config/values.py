@@ -1,0 +1,238 @@
+"""The values of omsd's configuration that are more than a TOML type: paths relative to the
+file, TCP addresses, the driver's hex options, permissions, board models, groups, the MQTT
+broker; each a type of :mod:`omsd.config.schema`'s keys with its words (:class:`Says`)."""
+
+import grp
+import ipaddress
+import os
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import Field, ValidationInfo
+
+from omsd.config import DEFAULT_HOST, TcpEndpoint
+from omsd.config.wording import Says, choices_json, problem
+from omsd.config_errors import show
+from omsd.models import MODELS, UnknownModel, get_model
+
+
+def _context(info: ValidationInfo) -> Path:
+    """The directory relative paths are taken from (the file's, or the working directory)."""
+    context = info.context or {}
+    base = context.get("base")
+    return base if isinstance(base, Path) else Path.cwd()
+
+
+def _resolve(text: str, info: ValidationInfo) -> Path:
+    return Path(os.path.normpath(_context(info) / Path(text).expanduser()))
+
+
+def hex_value(lo: int, hi: int) -> Callable[[int | str], int]:
+    """A driver option: a string is hexadecimal (``"0D"``, ``"0x0d"``), an integer is itself."""
+
+    def value(raw: int | str) -> int:
+        if isinstance(raw, int):
+            return raw
+        number = int(raw.strip().removeprefix("0x").removeprefix("0X"), 16)
+        if not lo <= number <= hi:
+            raise ValueError(f"{number} is out of range")
+        return number
+
+    return value
+
+
+def hex_pattern(digits: int) -> str:
+    return rf"^\s*(0[xX])?[0-9A-Fa-f]{{1,{digits}}}\s*$"
+
+
+def octal(raw: int | str) -> int:
+    """Permissions: an integer (TOML ``0o660``) or an octal string (``"0660"``, ``"0o660"``)."""
+    if isinstance(raw, int):
+        return raw
+    number = int(raw.strip().removeprefix("0o").removeprefix("0O"), 8)
+    if number > 0o777:
+        raise ValueError(f"{number:o} is out of range")
+    return number
+
+
+def _model_name(text: str) -> str:
+    try:
+        return get_model(text).name
+    except UnknownModel:
+        raise ValueError(text) from None
+
+
+def _group(name: str) -> str:
+    """The group a file the daemon creates is given (``[log] group``, ``[state] group``,
+    ``[control] group``): an existing group that the daemon's user is in (a process can only
+    give a file to a group it belongs to; root can give it to any), so that the mistake shows
+    now and not at the first write."""
+    try:
+        gid = grp.getgrnam(name).gr_gid
+    except KeyError:
+        raise problem(expected="the name of an existing group") from None
+    if os.geteuid() != 0 and gid != os.getegid() and gid not in os.getgroups():
+        raise problem(expected=f"a group that omsd's user (uid {os.geteuid()}) belongs to")
+    return name
+
+
+# TCP addresses -----------------------------------------------------------------------------------
+
+TCP_SYNTAX = "[HOST:]PORT with PORT 0..65535"
+_TCP = re.compile(r"(?:(?:\[(?P<v6>[^\]]*)\]|(?P<host>[^:\[\]]*)):)?(?P<port>[0-9]{1,5})")
+_HOSTNAME = re.compile(r"[A-Za-z0-9_]([A-Za-z0-9_-]*[A-Za-z0-9_])?(\.[A-Za-z0-9_-]+)*")
+
+
+def _tcp_address(raw: int | str) -> TcpEndpoint:
+    """``PORT``, ``HOST:PORT`` or ``[IPv6]:PORT``; an integer is a port on 127.0.0.1."""
+    if isinstance(raw, int):
+        return TcpEndpoint(DEFAULT_HOST, raw)
+    m = _TCP.fullmatch(raw)
+    if m is None or int(m.group("port")) > 65535:
+        raise ValueError(raw)
+    port = int(m.group("port"))
+    v6, host = m.group("v6"), m.group("host")
+    if v6 is not None:
+        try:
+            ipaddress.IPv6Address(v6)
+        except ValueError:
+            raise problem(expected="[HOST:]PORT with an IPv6 address inside [ ]") from None
+        return TcpEndpoint(v6, port)
+    if host is None:
+        return TcpEndpoint(DEFAULT_HOST, port)
+    if host == "":
+        raise problem(
+            expected="[HOST:]PORT with a HOST before the colon (0.0.0.0 for every interface)"
+        )
+    if re.fullmatch(r"[0-9.]+", host):
+        try:
+            ipaddress.IPv4Address(host)
+        except ValueError:
+            raise problem(expected="[HOST:]PORT with a valid IPv4 address") from None
+    elif not _HOSTNAME.fullmatch(host):
+        raise problem(expected="[HOST:]PORT with HOST an address or a host name")
+    return TcpEndpoint(host, port)
+
+
+def _family(host: str) -> int | None:
+    try:
+        return ipaddress.ip_address(host.split("%")[0]).version
+    except ValueError:
+        return None  # a host name: only the same name is known to collide
+
+
+def tcp_conflict(a: TcpEndpoint, b: TcpEndpoint) -> bool:
+    if a.port != b.port or a.port == 0:
+        return False
+    if a.host == b.host:
+        return True
+    family = _family(a.host)
+    wildcards = ("0.0.0.0", "::")
+    return (
+        family is not None
+        and family == _family(b.host)
+        and (a.host in wildcards or b.host in wildcards)
+    )
+
+
+def _is_address(host: str) -> bool:
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return True
+
+
+def broker_host(host: str) -> str:
+    if _is_address(host.strip("[]")) or (
+        _HOSTNAME.fullmatch(host) and not re.fullmatch(r"[0-9.]+", host)
+    ):
+        return host.strip("[]")
+    raise ValueError(host)
+
+
+def mqtt_client_id(text: str) -> str:
+    if "\x00" in text or len(text.encode()) > 65535:
+        raise problem(expected="an MQTT client identifier")
+    return text
+
+
+def _ca_file(path: Path) -> Path:
+    if not path.is_file():
+        raise problem(
+            expected="true, false or a CA certificate file", got=show(str(path), shorten=False)
+        )
+    return path
+
+
+# the types of the keys --------------------------------------------------------------------------
+
+PATH_PATTERN = r"^[^\x00]*[^\x00\s][^\x00]*$"  # not empty or blank, no NUL
+NAME_PATTERN = r"^(?:[A-Za-z0-9_.-]*[A-Za-z0-9_-][A-Za-z0-9_.-]*|\.{3,})$"  # not "." or ".."
+TCP_PATTERN = r"^(?:(?:\[[^\]]*\]|[^:\[\]]*):)?[0-9]{1,5}$"
+SERIAL_PATTERN = r"[A-Za-z0-9-]{1,16}"
+FIRMWARE_PATTERN = r"\d{1,2}\.\d{2}"
+TOPIC_PATTERN = r"^[^/+#\x00$][^/+#\x00]*(?:/[^/+#\x00]+)*$"  # levels; no + # or a leading $
+
+Flag = Annotated[bool, Says("true or false")]
+Text = Annotated[str, Says("a non-empty string", accepts=Annotated[str, Field(min_length=1)])]
+FilePath = Annotated[
+    Path,
+    Says(
+        "a path",
+        accepts=Annotated[str, Field(pattern=PATH_PATTERN)],
+        convert=_resolve,
+        with_info=True,
+    ),
+]
+FileGroup = Annotated[
+    str, Says("the name of a group omsd's user belongs to", accepts=Text, convert=_group)
+]
+TcpAddress = Annotated[
+    TcpEndpoint,
+    Says(
+        TCP_SYNTAX,
+        accepts=Annotated[int, Field(ge=0, le=65535)] | Annotated[str, Field(pattern=TCP_PATTERN)],
+        convert=_tcp_address,
+    ),
+]
+Steps = Annotated[
+    float,
+    Says(
+        "a number (motor steps)",
+        by_type=(("finite_number", "a finite number"),),
+        accepts=Annotated[float, Field(allow_inf_nan=False)],
+    ),
+]
+CaFile = Annotated[
+    Path, Says("true, false or a CA certificate file", accepts=FilePath, convert=_ca_file)
+]
+BoardModel = Annotated[
+    str,
+    Says(
+        f"a board model ({', '.join(MODELS)})",
+        convert=_model_name,
+        json=choices_json(tuple(MODELS), padded=True),
+    ),
+]
+
+
+__all__ = [
+    "TCP_SYNTAX",
+    "BoardModel",
+    "CaFile",
+    "FileGroup",
+    "FilePath",
+    "Flag",
+    "Steps",
+    "TcpAddress",
+    "Text",
+    "broker_host",
+    "hex_pattern",
+    "hex_value",
+    "mqtt_client_id",
+    "octal",
+    "tcp_conflict",
+]

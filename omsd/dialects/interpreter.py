@@ -1,0 +1,426 @@
+"""The command interpreter (PC48 §6.1, §6.2, §8.2), generic over dialects.
+
+"The commands from the PC/AT or compatible host computer are temporarily stored in a 124
+character buffer until the 68332 microprocessor can parse them. The command is then executed
+immediately or routed to separate command queues for each axis."
+
+The interpreter takes characters from the input buffer one at a time and lexes them; each
+complete command is checked against the personality's queue table for the current mode (single
+axis, AA, AM, contour definition), and handed to its handler in the dialect's table
+(:mod:`omsd.dialects.registry`). A command that needs queue space the axes do not have, and WQ,
+*hold* the interpreter: it stops taking characters, the input buffer fills, and the host is held
+off (§6.10: a loop larger than the queue "will hang" the board until Control-D).
+
+A dialect with state of its own (stored programs, a table being defined) subclasses
+:class:`Interpreter`; what the generic one offers such a dialect: characters diverted to a
+:class:`Capture` instead of the lexer, and ``only``, the commands valid until a definition ends.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Protocol
+
+from omsd.dialects.operands import CommandFailed, Operands
+from omsd.dialects.registry import Dialect, prefixes
+from omsd.engine.axis import Axis
+from omsd.engine.contour import ContourDefinition
+from omsd.engine.machine import Machine
+from omsd.engine.queue import Op
+from omsd.models.spec import Cell, CommandSpec, Kind
+from omsd.protocol.errors import ErrorKind
+from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
+from omsd.protocol.operands import OperandError
+
+__all__ = ["Blocked", "Capture", "CommandFailed", "Interpreter", "LoopMark"]
+
+MAX_LOOP_DEPTH = 4
+
+
+class _SyntaxTable(dict[str, Syntax]):
+    """Mnemonic -> syntax, UNKNOWN for anything else (looked up for every letter received)."""
+
+    def __missing__(self, key: str) -> Syntax:
+        return Syntax.UNKNOWN
+
+
+def _syntax(spec: CommandSpec) -> Syntax:
+    if spec.letter_operand:
+        return Syntax.AXIS
+    if spec.hex_operand:
+        return Syntax.HEX
+    if not spec.operand:
+        return Syntax.BARE
+    return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
+
+
+def _motor_fits(motor: str, axis: Axis) -> bool:
+    """The motor types a command applies to (servo, stepper with encoder, open loop)."""
+    servo = axis.is_servo
+    if motor == "servo":
+        return servo
+    if motor == "feedback":
+        return axis.has_encoder
+    if motor == "stepper_encoder":
+        return axis.has_encoder and not servo
+    if motor == "open_loop":
+        return not axis.has_encoder
+    raise ValueError(motor)
+
+
+class Blocked(Exception):
+    """Not enough queue space: retry the same command later."""
+
+
+class Capture(Protocol):
+    """Characters diverted from the lexer (a definition being recorded) until it says done."""
+
+    def feed(self, b: int) -> bool:
+        """Take one character; True once the capture has ended."""
+        ...
+
+    def finish(self, t: float) -> None:
+        """The capture ended (and the interpreter reads commands again)."""
+        ...
+
+
+@dataclass
+class LoopMark:
+    kind: str  # "LS", "WS", "WH"
+    context: str  # axis letter, or "AA" for a loop entered in AA/AM
+
+
+class Interpreter(Operands):
+    def __init__(self, machine: Machine, dialect: Dialect) -> None:
+        model = machine.model
+        self.machine = machine
+        self.dialect = dialect
+        self.buffer: deque[int] = deque()
+        self.capacity = model.input_buffer
+        self.commands = dialect.commands(model)
+        self.handlers = dialect.handlers(model)
+        self.ranges = dialect.ranges
+        self._reports = dialect.reports
+        self._check_fields = dialect.check_fields
+        self._feedback_per_axis = dialect.feedback_per_axis
+        self._syntax = _SyntaxTable({m: _syntax(spec) for m, spec in self.commands.items()})
+        self.lexer = self._lexer()
+        self._bare = self.lexer.bare_pairs(list(self.commands))
+        self.pending: deque[tuple[Token, int]] = deque()  # with the nesting depth it came from
+        self.reset()
+
+    def _lexer(self) -> Lexer:
+        if self.dialect.long_mnemonics:
+            starts = prefixes(self.commands)
+            return Lexer(self._syntax.__getitem__, starts.__contains__)
+        return Lexer(self._syntax.__getitem__)
+
+    def reset(self) -> None:
+        """A reset and power-up: interpreter state to defaults (the input buffer is kept)."""
+        n = len(self.machine.model.axes)
+        self.echo = False
+        self.mode = "single"
+        self.axis_index = 0
+        self.contour: ContourDefinition | None = None
+        self.loops: list[list[LoopMark]] = [[] for _ in range(n)]
+        self.while_flags: set[int] = set()
+        self.wq: list[int] | None = None
+        self.last_move: list[int] = []
+        self.mt_blocked = False
+        self.pa_entered: list[bool] = [False] * n
+        self.se_entered: list[bool] = [False] * n
+        self.ws_bits: dict[int, list[int]] = {}
+        self.capture: Capture | None = None  # characters go to a recording, not the lexer
+        self.only: frozenset[str] | None = None  # the only commands valid (a definition)
+        self.depth = 0
+        self.lexer.reset()
+
+    def power_up(self) -> None:
+        """Power-up and reset of the machine: the interpreter's too (the machine's front)."""
+        self.reset()
+
+    def load_flash(self) -> list[str]:
+        """Load what the dialect keeps in flash; nothing here (a dialect with flash says what
+        it skipped)."""
+        return []
+
+    # -- input ----------------------------------------------------------------------------------
+
+    def room(self) -> bool:
+        return len(self.buffer) < self.capacity
+
+    def accept(self, b: int) -> None:
+        self.buffer.append(b)
+
+    def discard_input(self) -> None:
+        self.buffer.clear()
+        self.pending.clear()
+        self.lexer.reset()
+        self.wq = None
+        self.capture = None
+
+    def end_of_session(self) -> None:
+        """Another session starts writing: what the last one left half-entered and would
+        swallow the newcomer's commands is abandoned (a capture, a definition)."""
+        self.capture = None
+        self.only = None
+
+    def control_d(self, t: float) -> None:
+        """Control-D: "the same functions as the KL command. It bypasses the command
+        interpreter" (PC48 §6.9). Whatever the interpreter was stuck on is dropped."""
+        self.discard_input()
+        self.kill_all(t)
+        self.machine.settle(t)
+
+    def clear_flags(self) -> None:
+        """IC and Control-Y (PC48 §6.12): "clear the done and error flags in the status register
+        and the done flag register"."""
+        machine = self.machine
+        machine.registers.clear_done_and_errors()
+        for axis in machine.axes:
+            axis.done = False
+
+    def kill_all(self, t: float) -> None:
+        """KL and Control-D: "flush the command queue and terminate pulse generation of all axes
+        immediately" (PC48 §6.9); also leaves contour definition and the WQ wait."""
+        for axis in self.machine.axes:
+            axis.halt(t)
+            axis.aux_timer = None
+        self.stop(list(self.machine.axes), t, kill=True)
+        self.contour = None
+        self.wq = None
+
+    def stop(
+        self, axes: list[Axis], t: float, kill: bool = False, cell: Cell | None = None
+    ) -> None:
+        """Flush the axes' queues and queue their stop (a kill stops the pulses at once)."""
+        machine = self.machine
+        for axis in axes:
+            machine.executor.flush(axis, t)
+        for axis in axes:
+            # "Flush + 2" (PC48); the PCIx's tables give their own numbers (+PA, +settle)
+            slots = self.cost(cell, axis) if cell is not None and cell.kind is Kind.FLUSH else 2
+            axis.queue.append(Op("STOP", (kill,), slots, source=machine.input_source))
+        self.mt_blocked = False
+
+    # -- the main loop --------------------------------------------------------------------------
+
+    def pump(self, t: float) -> bool:
+        machine = self.machine
+        machine.talker = machine.input_source  # what the interpreter says answers the sender
+        reports = self._reports
+        progressed = False
+        while True:
+            if machine.init_until is not None and t < machine.init_until:
+                return progressed
+            if self.wq is not None:
+                if not all(machine.axes[i].queue.empty for i in self.wq):
+                    return progressed
+                self.wq = None
+                progressed = True
+            if self.pending:
+                token, depth = self.pending.popleft()
+                self.depth = depth
+                if not self._dispatch(token, t):
+                    self.pending.appendleft((token, depth))
+                    return progressed
+                # let the axes run what was queued before the next command is read; a report or
+                # an axis selection queues nothing and leaves them as they were
+                if isinstance(token, Command) and token.mnemonic not in reports:
+                    for axis in machine.axes:
+                        machine.executor.step(axis, t)
+                progressed = True
+                continue
+            buffer = self.buffer
+            if not buffer:
+                return progressed
+            progressed = True
+            if self.echo or self.capture is not None:
+                b = buffer.popleft()
+                if self.echo:
+                    machine.reply(bytes([b]), t)
+                if self.capture is not None:
+                    self._capture(b, t)
+                    continue
+                tokens = self.lexer.feed(b)
+                if tokens:
+                    self.pending.extend((token, 0) for token in tokens)
+                continue
+            # the common case, in a tight loop: characters until one completes a command; an
+            # operand-less two-letter command between commands (QA, RP ...) is taken whole
+            lexer = self.lexer
+            feed = lexer.feed
+            bare = self._bare
+            while buffer:
+                if len(buffer) >= 2 and lexer.between_commands:
+                    command = bare.get((buffer[0], buffer[1]))
+                    if command is not None:
+                        buffer.popleft()
+                        buffer.popleft()
+                        self.pending.append((command, 0))
+                        break
+                tokens = feed(buffer.popleft())
+                if tokens:
+                    self.pending.extend((token, 0) for token in tokens)
+                    break
+
+    def _capture(self, b: int, t: float) -> None:
+        capture = self.capture
+        assert capture is not None
+        if not capture.feed(b):
+            return
+        self.capture = None
+        capture.finish(t)
+
+    def _dispatch(self, token: Token, t: float) -> bool:
+        """Execute one token; False if it must wait for queue space."""
+        if isinstance(token, Garbage):
+            self.machine.command_error(token.kind, token.text, t)
+            return True
+        try:
+            self._command(token, t)
+        except Blocked:
+            return False
+        except (CommandFailed, OperandError) as exc:
+            self.machine.command_error(exc.kind, token.text, t)
+        return True
+
+    def _command(self, cmd: Command, t: float) -> None:
+        model = self.machine.model
+        spec = self.commands[cmd.mnemonic]
+        cell = spec.cell(self.column)
+        if cell.kind is Kind.NOT_VALID:
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        if self.only is not None and cmd.mnemonic not in self.only:
+            # a definition in progress: only its own commands are valid until it ends
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        single = self.mode == "single" and self.contour is None
+        if spec.motor is not None and single and not _motor_fits(spec.motor, self.axis):
+            raise CommandFailed(ErrorKind.WRONG_MOTOR)
+        if spec.encoder_only:
+            if self.mode == "single" and self.contour is None:
+                if not self.axis.has_encoder:
+                    raise CommandFailed(ErrorKind.NO_ENCODER)
+            elif not model.encoder_option:
+                raise CommandFailed(ErrorKind.NO_ENCODER)
+        if spec.not_on_encoder_models and model.encoder_option:
+            raise CommandFailed(ErrorKind.ENCODER_MODEL)
+        if spec.single_axes is not None and self.axis.letter not in spec.single_axes:
+            if spec.other_axes_ignored:
+                return  # VS4 VS in AY-AT: "Ignored"
+            raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+        if cmd.error is not None:
+            raise CommandFailed(cmd.error)
+        if self._check_fields is not None and not spec.hex_operand:
+            self._check_fields(cmd)
+        handler = self.handlers.get(cmd.mnemonic)
+        if handler is None:  # a table row without behaviour must not take the board down
+            raise CommandFailed(ErrorKind.UNKNOWN_COMMAND)
+        handler(self, cmd, cell, t)
+
+    # -- context --------------------------------------------------------------------------------
+
+    @property
+    def column(self) -> str:
+        if self.contour is not None:
+            return "CD"
+        return self.mode
+
+    @property
+    def mode_name(self) -> str:
+        if self.contour is not None:
+            return "AA/CD"
+        if self.mode == "single":
+            return "A" + self.axis.letter
+        return self.mode
+
+    @property
+    def axis(self) -> Axis:
+        return self.machine.axes[self.axis_index]
+
+    def context_axes(self) -> list[Axis]:
+        """The axes a non-list command applies to: the current axis, or all in AA/AM."""
+        if self.mode == "single":
+            return [self.axis]
+        return list(self.machine.axes)
+
+    def context_tag(self) -> str:
+        return self.axis.letter if self.mode == "single" else "AA"
+
+    # -- queueing -------------------------------------------------------------------------------
+
+    def cost(self, cell: Cell, axis: Axis, contour_axes: int = 0) -> int:
+        model = self.machine.model
+        feedback = axis.has_encoder if self._feedback_per_axis else model.encoder_option
+        return cell.cost(
+            axis.ramp.kind.value,
+            feedback,
+            contour_axes,
+            segments=axis.ramp.segments,
+            pa=axis.pa is not None,
+            settle=axis.se_ms > 0,
+        )
+
+    def enqueue(self, items: list[tuple[Axis, Op]]) -> None:
+        """Place ops in their axis queues, all or nothing; :class:`Blocked` if any queue is
+        short of space (the interpreter then waits, PC48 §6.10)."""
+        need: dict[int, int] = {}
+        count: dict[int, int] = {}
+        for axis, op in items:
+            need[axis.index] = need.get(axis.index, 0) + op.slots
+            count[axis.index] = count.get(axis.index, 0) + 1
+        machine = self.machine
+        for index, slots in need.items():
+            q = machine.axes[index].queue
+            # zero-slot ops (WA, SW, CD) still hold a place: a queue never holds more entries
+            # than it has slots, so a flood of them holds the host off like any other
+            if q.free < slots or len(q.program) + count[index] > q.capacity:
+                raise Blocked
+        source = machine.input_source
+        for axis, op in items:
+            op.source = source
+            axis.queue.append(op)
+
+    # -- loops ----------------------------------------------------------------------------------
+
+    def in_loop(self, axes: list[Axis]) -> bool:
+        return any(self.loops[a.index] for a in axes)
+
+    def open_loop(self, kind: str, axes: list[Axis]) -> None:
+        for a in axes:
+            stack = self.loops[a.index]
+            if len(stack) >= MAX_LOOP_DEPTH:
+                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
+            if kind == "WH" and any(m.kind == "WH" for m in stack):
+                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
+
+    def push_loop(self, kind: str, axes: list[Axis]) -> None:
+        tag = self.context_tag()
+        for a in axes:
+            self.loops[a.index].append(LoopMark(kind, tag))
+
+    def close_loop(self, kind: str, axes: list[Axis]) -> None:
+        """LE/WD/WG must match the most recent LS/WS/WH entered in the same axis mode:
+        "otherwise the matching loop termination command will not be found"; CMD_S flags "LS
+        and LE commands are not in [matched] pairs"."""
+        tag = self.context_tag()
+        for a in axes:
+            stack = self.loops[a.index]
+            if not stack or stack[-1].kind != kind or stack[-1].context != tag:
+                raise CommandFailed(ErrorKind.LOOP_MISMATCH)
+
+    def pop_loop(self, axes: list[Axis]) -> None:
+        for a in axes:
+            self.loops[a.index].pop()
+
+    def forget_loops(self, index: int) -> None:
+        """The axis queue was flushed: its loops are gone with it."""
+        self.loops[index].clear()
+        self.while_flags.discard(index)
+
+    def take_while_flag(self, index: int) -> bool:
+        if index in self.while_flags:
+            self.while_flags.discard(index)
+            return True
+        return False

@@ -1,0 +1,98 @@
+"""The PCIx's language (model rows with ``dialect = "pcix"``), with the MAX-family queries a
+model row may switch on (``max_queries``).
+
+The shared OMS language (:mod:`omsd.dialects.shared`) with the PCIx's own handlers over it
+(:mod:`~omsd.dialects.pcix.settings`, :mod:`~omsd.dialects.pcix.ramps`,
+:mod:`~omsd.dialects.pcix.servo`, :mod:`~omsd.dialects.pcix.reports`,
+:mod:`~omsd.dialects.pcix.gearing`, :mod:`~omsd.dialects.pcix.motion`,
+:mod:`~omsd.dialects.pcix.stops`) and the MAX family's
+(:mod:`~omsd.dialects.pcix.max_family`); its interpreter (:mod:`~omsd.dialects.pcix.interpreter`:
+macros, ramp-table definitions, flash, the 32-bit operand check), its range table
+(:mod:`~omsd.dialects.pcix.ranges`), its framing (``text<LF><CR>``, nothing before it) and
+the engine as the PCIx manual describes it: soft limits per axis, for moves and jogs; slip
+tolerance 1 at the factory ("factory default value is 1"); a jog ends slip detection; RM folds
+the encoder too; ML/MT put VL, AC and VB back; the GS home-switch watch at every sensor look.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from functools import cache
+
+from omsd.dialects.pcix import gearing, motion, ramps, reports, servo, settings, stops
+from omsd.dialects.pcix.common import PCIX_HANDLERS, PCIX_OPS
+from omsd.dialects.pcix.interpreter import PcixInterpreter, check_32_bit
+from omsd.dialects.pcix.max_family import MAX_HANDLERS
+from omsd.dialects.pcix.motion import watch_home_switch
+from omsd.dialects.pcix.ranges import PCIX_RANGES
+from omsd.dialects.registry import AnyHandler, Dialect, register
+from omsd.dialects.shared import HANDLERS, REPORTS
+from omsd.engine.extensions import Framing, Options
+from omsd.engine.states import Motion
+from omsd.models import MODELS
+from omsd.models.max_family import MAX_COMMANDS
+from omsd.models.spec import CommandSpec, Model
+
+_MODULES = (gearing, motion, ramps, reports, servo, settings, stops)  # each files its handlers
+
+FRAMING = Framing(value=(b"", b"\n\r"), status=(b"", b"\n\r"))
+
+OPTIONS = Options(
+    slip_tolerance=1.0,
+    soft_limit_per_axis=True,
+    soft_limit_motions=frozenset({Motion.MOVE, Motion.JOG}),
+    jog_disables_slip_detection=True,
+    remainder_folds_encoder=True,
+    linear_moves_restore=True,
+)
+
+
+def _commands(model: Model) -> Mapping[str, CommandSpec]:
+    """The model's command table, with the MAX-family extension when it is switched on."""
+    if model.max_queries:
+        return {**model.commands, **MAX_COMMANDS}
+    return model.commands
+
+
+@cache
+def _table(max_queries: bool) -> dict[str, AnyHandler]:
+    table: dict[str, AnyHandler] = {**HANDLERS, **PCIX_HANDLERS}
+    if max_queries:
+        table.update(MAX_HANDLERS)
+    return table
+
+
+def _handlers(model: Model) -> Mapping[str, AnyHandler]:
+    return _table(model.max_queries)
+
+
+def _queries() -> frozenset[str]:
+    """Every ``?XX`` query of every PCIx table (and the MAX family's ``?PS``)."""
+    tables = [m.commands for m in MODELS.values() if m.dialect == "pcix"] + [MAX_COMMANDS]
+    return frozenset(m for table in tables for m in table if m.startswith("?"))
+
+
+DIALECT = register(
+    Dialect(
+        name="pcix",
+        description="PCIx, with the MAX-family queries",
+        commands=_commands,
+        handlers=_handlers,
+        ranges=PCIX_RANGES,
+        framing=FRAMING,
+        framing_name="trailing",
+        reports=REPORTS
+        | {"PP", "PE", "PM", "EG?"}
+        | {"QL", "#WS", "PS?", "LT?", "CL?"}
+        | _queries(),
+        interpreter=PcixInterpreter,
+        options=OPTIONS,
+        ops=PCIX_OPS,
+        sensor_hooks=(watch_home_switch,),
+        long_mnemonics=True,
+        check_fields=check_32_bit,
+        feedback_per_axis=True,
+    )
+)
+
+__all__ = ["DIALECT", "FRAMING", "OPTIONS"]

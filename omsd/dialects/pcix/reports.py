@@ -1,0 +1,211 @@
+"""PCIx status and reports, flags and the general-purpose I/O whose meaning changed from the
+PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, BX, RB, BS)."""
+
+from __future__ import annotations
+
+import math
+from decimal import Decimal
+
+from omsd.dialects.interpreter import CommandFailed, Interpreter
+from omsd.dialects.pcix.common import (
+    flag_axes,
+    handles,
+    reply,
+)
+from omsd.dialects.shared.io import aux
+from omsd.engine.axis import Axis
+from omsd.engine.queue import Op, SyncGroup
+from omsd.models.spec import Cell
+from omsd.protocol.errors import ErrorKind
+from omsd.protocol.lexer import Command
+
+# -- status and reports ---------------------------------------------------------------------------
+
+
+@handles("RQ")
+def _rq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Every axis's free queue units, whatever the mode: the example types ``RQ`` with no mode
+    command (every other example that needs AA types ``AA;`` first) and gets "800, 800, 800,
+    800"; "MAX value of command queue for all axes = 800". Inside a contour definition the
+    contour queue (7160)."""
+    if ix.contour is not None:
+        reply(ix, str(ix.contour.free), t)
+    else:
+        reply(ix, ", ".join(str(a.queue.free) for a in ix.machine.axes), t)
+
+
+@handles("RC")
+def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "2000000, 2000000, 2000000, 2000000": the acceleration now, "zero when the stage is
+    stopped or running at constant speed" (unlike the PC48, which reports the ramp's)."""
+    axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
+    reply(ix, ", ".join(str(math.trunc(abs(a.acceleration(t)))) for a in axes), t)
+
+
+@handles("RU")
+def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "uu3.50000": the position in user units, five decimals."""
+    axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
+    texts = []
+    for axis in axes:
+        value = Decimal(axis.counter(t))
+        if axis.uu is not None:
+            value = value / axis.uu
+        texts.append(f"uu{value:.5f}")
+    reply(ix, ",".join(texts), t)
+
+
+@handles("RE")
+def _re(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Encoder position of the current axis, or of every axis in AA/AM (an axis without an
+    encoder reports its position counter, which is what an open-loop stepper knows)."""
+    axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
+    if ix.mode == "single" and not ix.axis.has_encoder:
+        raise CommandFailed(ErrorKind.NO_ENCODER)
+    reply(ix, ",".join(str(_encoder(a, t)) for a in axes), t)
+
+
+def _encoder(axis: Axis, t: float) -> int:
+    return axis.encoder(t) if axis.has_encoder else axis.counter(t)
+
+
+@handles("PE")
+def _pe(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "same as AA;RE;" whatever the mode."""
+    reply(ix, ",".join(str(_encoder(a, t)) for a in ix.machine.axes), t)
+
+
+@handles("PP")
+def _pp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "same as AA; RP" whatever the mode."""
+    reply(ix, ",".join(str(a.counter(t)) for a in ix.machine.axes), t)
+
+
+@handles("RL")
+def _rl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """One character per axis: "Open-loop stepper always returns “n” and servo axes always
+    returns “N”"."""
+    chars = []
+    for a in ix.machine.axes:
+        if not a.has_encoder:
+            chars.append("n")
+        elif a.is_servo:
+            chars.append("N")
+        else:
+            chars.append("S" if a.slipped else "N")
+    reply(ix, "".join(chars), t)
+
+
+@handles("EA")
+def _ea(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Encoder status, five characters (§5.4.6's table): slip detection E/D, position
+    maintenance (or a servo's closed loop) E/D, slip S/N, in position P/N, and home: the table
+    prints ``P`` for "Encoder is at home condition", which is sent as printed (the PC48 and VS4
+    print ``H``); one field per axis, comma separated, in AA/AM."""
+    axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
+    texts = []
+    for axis in axes:
+        hold = axis.servo.closed if axis.servo is not None else axis.hold
+        texts.append(
+            "".join(
+                (
+                    "E" if axis.slip_detect else "D",
+                    "E" if hold else "D",
+                    "S" if axis.slipped else "N",
+                    "P" if hold and axis.in_position else "N",
+                    # "P Encoder is at home condition" (the older boards print H here)
+                    "P" if axis.home_condition(t) else "N",
+                )
+            )
+        )
+        axis.slipped = False
+    ix.machine.reply_status(",".join(texts), t)
+
+
+@handles("CA")
+def _ca(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "In multi-axis modes, the CA command clears the flags of all selected axes" (``AA;
+    CA,1,1;`` clears Y and Z); "Unlike the IC command, CA will not clear other error flags"."""
+    ix.machine.clear_done(flag_axes(ix, cmd))
+
+
+@handles("AN", "AF")
+def _an(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """AN/AF; in a contour definition "The AN and AF commands must have commas for all axes"
+    and an axis without a value is left alone, so ``AN,,;`` changes nothing (the CK example)."""
+    if ix.contour is not None and not any(f is not None for f in cmd.fields or ()):
+        if not ix.contour.add(None, ix.cost(cell, ix.axis)):
+            raise CommandFailed(ErrorKind.CONTOUR_FULL)
+        return
+    aux(ix, cmd, cell, t)
+
+
+@handles("SW", "BW")
+def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Wait for general-purpose input # to go high (SW) or low (BW); in AA every axis waits."""
+    machine = ix.machine
+    bit = ix.integer(ix.one(cmd), cmd.mnemonic)
+    args = (bit, cmd.mnemonic == "SW")
+    if ix.mode == "single":
+        ix.enqueue([(ix.axis, Op("SW", args, ix.cost(cell, ix.axis)))])
+        return
+    group = SyncGroup(set(range(len(machine.axes))))
+    ix.enqueue([(a, Op("SW", args, ix.cost(cell, a), group)) for a in machine.axes])
+
+
+@handles("PH", "PL")
+def _ph(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """Auxiliary output high (PH) or low (PL); "disables PA" (queued like AN/AF)."""
+    code = "AN" if cmd.mnemonic == "PH" else "AF"
+    axes = flag_axes(ix, cmd)
+    ix.enqueue([(a, Op(code, (), ix.cost(cell, a))) for a in axes])
+    for a in axes:
+        ix.pa_entered[a.index] = False
+
+
+# -- general-purpose I/O --------------------------------------------------------------------------
+
+
+def _io_high(ix: Interpreter, t: float) -> int:
+    bits = (1 << ix.machine.model.io_bits) - 1
+    return ~ix.machine.io_bits_low(t) & bits
+
+
+@handles("BX")
+def _bx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """I/O state in hex, "low = 0, high = 1" (``05``)."""
+    reply(ix, f"{_io_high(ix, t):02x}", t)
+
+
+@handles("RB")
+def _rb(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """I/O bit directions in hex, 1 = output (``0f``: bits 0-3 outputs)."""
+    reply(ix, f"{ix.machine.directions:02x}", t)
+
+
+@handles("BS")
+def _bs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "Set all of the output bits to a known state at the same time ... The mask must be in
+    ASCII hex format where the least significant bit (bit 0) is on the right. To set a line
+    low, the corresponding bit in the hex mask must be a 0. A one (1) in any bit position will
+    set the corresponding bit high." "Range: 00 ≤ Hex number ≤ FF" (its row); "Data written to
+    input bits has no effect". The lexer reads the operand as hexadecimal digits (``BSA5;``,
+    ``BSff;``: the table row's ``hex_operand``)."""
+    fields = cmd.fields or ()
+    if len(fields) != 1 or fields[0] is None:
+        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+    try:
+        mask = int(fields[0], 16)
+    except ValueError:
+        raise CommandFailed(ErrorKind.BAD_NUMBER) from None
+    ix.check("BS", mask)
+    axis = ix.axis
+
+    machine = ix.machine
+
+    def apply(a: Axis, when: float) -> None:
+        for bit in range(machine.model.io_bits):
+            if machine.directions >> bit & 1:
+                machine.set_output(bit, not (mask >> bit & 1), when)
+
+    ix.enqueue([(axis, Op("SET", ("BS", apply), ix.cost(cell, axis)))])

@@ -1,0 +1,142 @@
+"""The shared language, PC48 §6.13 and §6.14: status requests and user units."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from decimal import Decimal
+
+from omsd.dialects.interpreter import Interpreter
+from omsd.dialects.shared.table import handles
+from omsd.engine import profiles as pf
+from omsd.engine.axis import Axis, Motion
+from omsd.engine.registers import OVRT
+from omsd.models.spec import Cell
+from omsd.protocol.lexer import Command
+
+
+def status(axis: Axis, t: float) -> str:
+    """RA/QA field (PC48 §6.13 RA): direction P/M, done D/N, overtravel L/N (in the direction
+    of char 4), home H/N."""
+    d = axis.heading(t)
+    return "".join(
+        (
+            "P" if d > 0 else "M",
+            "D" if axis.done else "N",
+            "L" if axis.limit_active(d, t) else "N",
+            "H" if axis.home_sensed(t) else "N",
+        )
+    )
+
+
+# -- 6.13 status requests -------------------------------------------------------------------------
+
+
+@handles("WY")
+def _wy(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    ix.machine.reply_value(ix.machine.model.who_are_you(), t)
+
+
+def _list(ix: Interpreter, fn: Callable[[Axis], str], t: float) -> None:
+    if ix.mode == "single":
+        ix.machine.reply_value(fn(ix.axis), t)
+    else:
+        ix.machine.reply_value(",".join(fn(a) for a in ix.machine.axes), t)
+
+
+@handles("RP")
+def _rp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    _list(ix, lambda a: str(a.counter(t)), t)
+
+
+@handles("RQ")
+def _rq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    if ix.contour is not None:
+        # "The maximum available is 1016. The response is fixed in length at 4 characters."
+        ix.machine.reply_value(f"{ix.contour.free:04d}", t)
+        return
+    _list(ix, lambda a: f"{a.queue.free:03d}", t)
+
+
+@handles("RC")
+def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    _list(ix, lambda a: str(int(_current_acceleration(ix, a, t))), t)
+
+
+def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
+    """PC48 §6.13 RC: "When the stage is stopped, the parameter returned will be the acceleration
+    at the beginning of a ramp. When the stage is running at programmed speed ... the
+    acceleration at the end of the ramp.\""""
+    if axis.motion is not Motion.IDLE:
+        a = abs(axis.acceleration(t))
+        if a > 0.0 or axis.velocity(t) == 0.0:
+            return a
+        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
+        return abs(up.a(up.duration))
+    up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
+    return abs(up.a(0.0))
+
+
+@handles("RV")
+def _rv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    # "If the JF command is executing, the command only reports the integer part"
+    _list(ix, lambda a: str(math.trunc(a.velocity(t))), t)
+
+
+@handles("RU")
+def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    # "a floating point number with five characters to the right of the decimal point"
+    axis = ix.axis
+    value = Decimal(axis.counter(t))
+    if axis.uu is not None:
+        value = value / axis.uu
+    ix.machine.reply_value(f"{value:.5f}", t)
+
+
+@handles("RA", "QA")
+def _ra(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    axis = ix.axis
+    ix.machine.reply_status(status(axis, t), t)
+    if cmd.mnemonic == "RA":
+        _reset_flags(ix, [axis], t)
+
+
+@handles("RI", "QI")
+def _ri(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    machine = ix.machine
+    machine.reply_status(",".join(status(a, t) for a in machine.axes), t)
+    if cmd.mnemonic == "RI":
+        _reset_flags(ix, machine.axes, t)
+
+
+def _reset_flags(ix: Interpreter, axes: list[Axis], t: float) -> None:
+    """RA: "The limit flag in the hardware status register will be reset by the RA command,
+    providing another axis is not in limit. The done flag register will also be reset"."""
+    machine = ix.machine
+    machine.clear_done(axes)
+    others = [a for a in machine.axes if a not in axes]
+    if not any(a.limit_active(a.direction, t) for a in others):
+        machine.registers.status &= ~OVRT
+
+
+# -- 6.14 user units ------------------------------------------------------------------------------
+
+
+@handles("UU")
+def _uu(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    # single-axis on the PC48; the VS4 manual also shows ``AA UU10000,10000,10000;``
+    if ix.mode == "single":
+        value = ix.one(cmd)
+        assert value is not None
+        items = {ix.axis_index: value}
+    else:
+        items = ix.per_axis(cmd)
+    for value in items.values():
+        ix.check("UU", value)
+    for index, value in items.items():
+        ix.machine.axes[index].uu = None if value == 1 else value
+
+
+@handles("UF")
+def _uf(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    ix.axis.uu = None

@@ -1,0 +1,97 @@
+"""One axis of a board in motion: starting and ending motion, and when it next needs a look.
+
+:class:`Axis` is an :class:`~omsd.engine.axis_state.AxisState` (parameters, frames, switches,
+encoder) that can begin new motion from wherever it is, come to rest on a whole step, stop at
+once or ramp down, and say when something will next happen to it by itself
+(:mod:`omsd.engine.sensing`), quantized onto the sample grid so the board can sleep until then.
+Whenever its trajectory is replaced the axes geared to it follow (:mod:`omsd.engine.gearing`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from omsd.engine import profiles as pf
+from omsd.engine.axis_state import SERVO_CHECK, AxisState, steps
+from omsd.engine.gearing import moved
+from omsd.engine.sensing import next_event
+from omsd.engine.states import HomeSearch, Motion, Pending, Wait
+from omsd.engine.trajectory import Trajectory
+
+__all__ = ["SERVO_CHECK", "Axis", "HomeSearch", "Motion", "Pending", "Wait"]
+
+
+class Axis(AxisState):
+    # -- motion -------------------------------------------------------------------------------
+
+    def begin(
+        self, t: float, pieces: list[pf.Piece], motion: Motion, final: float | None = None
+    ) -> None:
+        """Start new motion on tick ``t`` from wherever the axis is then (position and
+        velocity). Until ``t`` the axis goes on as it was: asking for the position between now
+        and the tick must not show the future."""
+        if self.gear is not None:  # a geared axis moves only as its master does
+            return
+        host = self.host
+        self.source = host.talker
+        now = min(host.now, t)
+        self.servo_sync(now)
+        prefix = pf.segment(self.traj, now, t) if t > now else []
+        moving_before = any(p.v(0.0) != 0.0 or p.a(0.0) != 0.0 for p in prefix)
+        x_now = self.traj.position(now)
+        if not pieces and not moving_before:
+            x = self.traj.position(t)
+            self.traj = Trajectory.at_rest(now, x if final is None else final)
+            self.motion = Motion.IDLE
+        else:
+            if not moving_before:
+                prefix = [pf.cruise(0.0, t - now)] if t > now else []
+            self.traj = Trajectory(now, x_now, [*prefix, *pieces], final)
+            self.motion = motion
+            if motion is not Motion.HOLD:
+                self.in_position = False
+        self.sensor_check = t
+        self.invalidate()
+        moved(self, now, t, motion)
+
+    def settle(self, t: float) -> None:
+        """Come to rest on the whole step the counter shows (end of motion)."""
+        self.servo_sync(t)
+        self.note_direction(t)
+        x = self.traj.position(t)
+        self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
+        self.motion = Motion.IDLE
+        self.invalidate()
+        moved(self, t, None, None)
+
+    def halt(self, t: float) -> None:
+        """Stop pulses at once (a kill, a hard limit, home found by a kill-at-home search)."""
+        self.servo_sync(t)
+        self.note_direction(t)
+        x = self.traj.position(t)
+        self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
+        self.motion = Motion.IDLE
+        self.home = None
+        self.invalidate()
+        moved(self, t, None, None)
+
+    def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
+        """Ramp down to rest at the axis's acceleration (a stop, a soft limit, after home)."""
+        v = self.traj.velocity(t)
+        if v == 0.0:
+            self.halt(t)
+            return
+        self.begin(t, pf.velocity_change(v, 0.0, self.ac), motion)
+
+    # -- what happens next --------------------------------------------------------------------
+
+    def next_event_time(self) -> float | None:
+        if self._cache is None:
+            self._cache = next_event(self)
+        t = self._cache[0]
+        return None if math.isinf(t) else t
+
+    def due(self) -> str:
+        if self._cache is None:
+            self._cache = next_event(self)
+        return self._cache[1]

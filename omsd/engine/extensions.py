@@ -1,0 +1,101 @@
+"""The engine's extension points: what a dialect gives the engine, and what the engine asks of
+the command language in front of it.
+
+The engine knows no command language. A dialect (:mod:`omsd.dialects`) hands a
+:class:`~omsd.engine.machine.Machine` these, through the board that joins them:
+
+* :class:`Framing`: the bytes around a value and a status reply;
+* :class:`Options`: behaviour switches where the manuals of two families disagree about a
+  general mechanism (soft limits per axis or per board, whether a jog ends slip detection ...);
+* extra executor ops and sensor hooks (:data:`omsd.engine.executor.OpFunction`,
+  :data:`omsd.engine.executor.SensorHook`), for the queued commands only one dialect has.
+
+and the machine asks its :class:`Front` (the dialect's interpreter) to read input, to report
+whether there is room for more, to forget loops a flush dropped and to power up with it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+from omsd.engine.states import Motion
+
+
+@dataclass(frozen=True, slots=True)
+class Framing:
+    """The bytes before and after a reply's text: ``value`` for a value (a position, an
+    identification), ``status`` for an axis status."""
+
+    value: tuple[bytes, bytes]
+    status: tuple[bytes, bytes]
+
+
+#: No framing at all (a machine without a dialect).
+BARE = Framing((b"", b""), (b"", b""))
+
+
+@dataclass(frozen=True, slots=True)
+class Options:
+    """Switches of general mechanisms, set by the dialect a model row names."""
+
+    #: the slip tolerance an axis leaves the factory with
+    slip_tolerance: float = 0.0
+    #: the soft-limit mode is kept per axis (else setting it on one axis sets it on every axis)
+    soft_limit_per_axis: bool = False
+    #: the motions that ramp down at a limit when the soft-limit mode is on
+    soft_limit_motions: frozenset[Motion] = frozenset({Motion.MOVE})
+    #: starting a jog switches slip detection off
+    jog_disables_slip_detection: bool = False
+    #: the remainder op folds the encoder position as well as the counter
+    remainder_folds_encoder: bool = False
+    #: linear interpolation puts the velocity and acceleration registers back after scaling
+    linear_moves_restore: bool = False
+
+
+class Front(Protocol):
+    """What the machine needs of the command language in front of it."""
+
+    #: characters read are echoed, and a command error says its message
+    echo: bool
+
+    def pump(self, t: float) -> bool:
+        """Read and run what waits in the input; True if anything happened."""
+        ...
+
+    def room(self) -> bool:
+        """The input buffer can take a character."""
+        ...
+
+    def forget_loops(self, index: int) -> None:
+        """Axis ``index``'s queue was flushed: the loops open in it are gone."""
+        ...
+
+    def take_while_flag(self, index: int) -> bool:
+        """Axis ``index``'s while loop was told to end (and the flag is taken)."""
+        ...
+
+    def power_up(self) -> None:
+        """Power-up and reset: the language's state to its defaults."""
+        ...
+
+
+class Silent:
+    """The front of a machine nobody talks to."""
+
+    echo = False
+
+    def pump(self, t: float) -> bool:
+        return False
+
+    def room(self) -> bool:
+        return True
+
+    def forget_loops(self, index: int) -> None:
+        return None
+
+    def take_while_flag(self, index: int) -> bool:
+        return False
+
+    def power_up(self) -> None:
+        return None

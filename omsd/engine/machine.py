@@ -1,0 +1,269 @@
+"""The machine: a pure, clock-injected model of one card's mechanics, without a language.
+
+Theory of operation (after PC48 §8.2): each axis executes its command queue concurrently,
+moving its motor along analytic velocity profiles computed on a grid of samples (2048 a second
+on the PC48); switches, encoders and input lines of the simulated world are watched on that grid
+too. What fills the queues is the command language in front of the machine (its
+:class:`~omsd.engine.extensions.Front`, a dialect's interpreter), which
+:meth:`Machine.settle` runs whenever the queues have run.
+
+The machine never reads a clock and never sleeps. Every entry point takes ``now`` (seconds, any
+origin); :meth:`Machine.next_deadline` says when something will next change by itself (a move
+ends, a switch is reached, a timed wait expires), so a caller can sleep until then, and a test
+can step a ten-minute move in microseconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+from omsd.engine import profiles as pf
+from omsd.engine import reactions
+from omsd.engine.axis import Axis
+from omsd.engine.core import Core
+from omsd.engine.executor import Executor, OpFunction, SensorHook
+from omsd.engine.extensions import BARE, Framing, Options
+from omsd.engine.ops_flow import FLOW_OPS
+from omsd.engine.ops_motion import MOTION_OPS
+from omsd.engine.ops_parameters import PARAMETER_OPS
+from omsd.engine.states import Motion
+from omsd.engine.world import AxisWorld
+from omsd.models.spec import Model
+
+MAX_EVENTS_PER_ADVANCE = 1_000_000
+
+#: The ops every machine runs (the shared language's queued commands).
+ENGINE_OPS: dict[str, OpFunction] = {**PARAMETER_OPS, **MOTION_OPS, **FLOW_OPS}
+
+
+class Machine(Core):
+    """One card's mechanics; see the module docstring. ``ops`` and ``sensor_hooks`` add a
+    dialect's queued commands and sensor looks to the engine's own; ``framing`` and
+    ``options`` are the dialect's."""
+
+    def __init__(
+        self,
+        model: Model,
+        now: float = 0.0,
+        world: Mapping[str, AxisWorld] | Sequence[AxisWorld] | None = None,
+        *,
+        framing: Framing = BARE,
+        options: Options | None = None,
+        ops: Mapping[str, OpFunction] | None = None,
+        sensor_hooks: Sequence[SensorHook] = (),
+    ) -> None:
+        super().__init__(model, now, world, framing, options or Options())
+        self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
+        self.power_up(now)
+
+    # -- power ----------------------------------------------------------------------------------
+
+    def power_up(self, t: float) -> None:
+        """Power-up defaults of the machine, then of its front (the language)."""
+        self.ramp = pf.LINEAR
+        self.soft_limits = False
+        self.outputs_low = 0  # outputs driven low: "off at power up or reset"
+        self.directions = self.model.factory_outputs
+        self.contour_velocity = float(self.model.default_contour_velocity)
+        self.contour = None
+        self.registers.control = 0  # "All interrupts are disabled."
+        self.registers.done = 0
+        self.registers.status = 0
+        self.init_until = None
+        self.front.power_up()
+
+    def reset(self, t: float) -> None:
+        """A reset (PC48 §6.5 RS): "All previously entered data and commands are lost. All
+        internal parameters are initialized to defaults. All interrupts are disabled." The INIT
+        status bit is high for ``model.init_time``; input received meanwhile waits."""
+        for axis in self.axes:
+            axis.reset(t)
+        self.power_up(t)
+        self.init_until = t + self.model.init_time
+
+    # -- time -----------------------------------------------------------------------------------
+
+    def advance(self, now: float) -> None:
+        """Let everything that happens by itself happen, up to ``now``."""
+        if now < self.now:
+            now = self.now
+        for _ in range(MAX_EVENTS_PER_ADVANCE):
+            t = self._next_internal()
+            if t is None or t > now:
+                break
+            self.now = max(self.now, t)
+            self._handle_due(t)
+            self.settle(t)
+        self.now = now
+
+    def next_deadline(self) -> float | None:
+        """When the machine next changes by itself; ``None`` if it never will on its own."""
+        t = self._next_internal()
+        if t is not None and t <= self.now:
+            return self.now
+        return t
+
+    def _next_internal(self) -> float | None:
+        best = self.init_until
+        for axis in self.axes:
+            t = axis.next_event_time()
+            if t is not None and (best is None or t < best):
+                best = t
+        return best
+
+    def _handle_due(self, t: float) -> None:
+        if self.init_until is not None and self.init_until <= t:
+            self.init_until = None
+        ex = self.executor
+        for axis in self.axes:
+            self.talker = axis.source  # what happens to an axis is the business of its mover
+            for _ in range(64):
+                when = axis.next_event_time()
+                if when is None or when > t:
+                    break
+                kind = axis.due()
+                if kind == "end":
+                    reactions.on_end(ex, axis, t)
+                elif kind == "sensor":
+                    reactions.on_sensor(ex, axis, t)
+                elif kind == "in":
+                    reactions.fire_in(ex, axis, t)
+                elif kind == "aux":
+                    reactions.on_aux_timer(ex, axis, t)
+                elif kind == "output":
+                    reactions.on_outputs(ex, axis, t)
+                elif kind == "servo":
+                    reactions.on_servo(ex, axis, t)
+                elif kind == "wait" and not ex.step(axis, t):
+                    if axis.wait is not None:
+                        axis.wait.until = None
+                    axis.invalidate()
+                axis.invalidate()
+        self.talker = 0
+
+    def settle(self, t: float) -> None:
+        """Run queues and the front until nothing more happens at ``t``."""
+        for _ in range(10_000):
+            progressed = False
+            for axis in self.axes:
+                if self.executor.step(axis, t):
+                    progressed = True
+            if self.front.pump(t):
+                progressed = True
+            if not progressed:
+                return
+
+    # -- registers ------------------------------------------------------------------------------
+
+    def read_status_register(self, now: float) -> int:
+        """Read offset 3; DON_S, CMD_S, ENC_S and OVRT reset on read (PC48 §3.4.4)."""
+        self.advance(now)
+        value = self.status_register(now)
+        self.registers.clear_on_status_read()
+        return value
+
+    def read_done_register(self, now: float) -> int:
+        """Read offset 1: "This register is cleared automatically after it is read.\""""
+        self.advance(now)
+        return self.registers.read_done()
+
+    def write_control_register(self, value: int, now: float) -> None:
+        self.advance(now)
+        self.registers.control = value & 0xF0
+
+    def read_control_register(self, now: float) -> int:
+        return self.registers.control
+
+    def write_vector_register(self, value: int, now: float) -> None:
+        """VME boards (VS4): "Interrupt Vector", a read/write byte returned during IACK."""
+        self._need_vector()
+        self.registers.vector = value & 0xFF
+
+    def read_vector_register(self, now: float) -> int:
+        self._need_vector()
+        return self.registers.vector
+
+    def _need_vector(self) -> None:
+        if not self.model.vector_register:
+            raise ValueError(f"a {self.model.name} has no interrupt vector register")
+
+    # -- the simulated world (tests, control API) -----------------------------------------------
+
+    def set_limit(self, axis: str, direction: int, active: bool | None, now: float) -> None:
+        """Force a limit switch (``None``: let the carriage position decide again)."""
+        self.advance(now)
+        a = self._axis(axis)
+        self.world.force_limit(a.index, direction, active)
+        self._sensors_changed(a, now)
+
+    def set_home(self, axis: str, activated: bool | None, now: float) -> None:
+        self.advance(now)
+        a = self._axis(axis)
+        if activated is None:
+            self.world.forced_home.pop(a.index, None)
+        else:
+            self.world.forced_home[a.index] = activated
+        self._sensors_changed(a, now)
+
+    def set_input(self, bit: int, high: bool | None, now: float) -> None:
+        """Drive a general-purpose input line (``None``: release it to its pull-up)."""
+        self.advance(now)
+        if not 0 <= bit < self.model.io_bits:
+            raise ValueError(f"no I/O bit {bit} on a {self.model.name}")
+        if high is None:
+            self.world.input_levels.pop(bit, None)
+        else:
+            self.world.input_levels[bit] = high
+        self.settle(now)
+
+    def wire_input_to_aux(self, bit: int, axis: str | None) -> None:
+        """Wire an axis's open-collector auxiliary output to a general-purpose input."""
+        if axis is None:
+            self.world.aux_wiring.pop(bit, None)
+        else:
+            self.world.aux_wiring[bit] = self._axis(axis).index
+
+    def inject_slip(self, axis: str, steps: float, now: float) -> None:
+        """The load (and its encoder) jumps ``steps`` away from where the pulses put it."""
+        self.advance(now)
+        a = self._axis(axis)
+        if a.stall_phys is not None:
+            a.stall_phys += steps
+        else:
+            a.phys_offset += steps
+        self._sensors_changed(a, now)
+
+    def set_stall(self, axis: str, stalled: bool, now: float) -> None:
+        """A stalled motor does not follow its pulses; the carriage stays where it is."""
+        self.advance(now)
+        a = self._axis(axis)
+        if stalled and a.stall_phys is None:
+            a.stall_phys = a.phys(now)
+        elif not stalled and a.stall_phys is not None:
+            a.phys_offset = a.stall_phys - a.position(now)
+            a.stall_phys = None
+        self._sensors_changed(a, now)
+
+    def set_encoder_input(self, axis: str, counts: int, now: float) -> None:
+        """Drive the encoder input from outside, as a handwheel or another device would. In
+        tracking mode the axis follows it at once, with no ramps (PC48 §6.17: "The axis will
+        duplicate the encoder input"); otherwise the encoder simply disagrees with the motor."""
+        self.advance(now)
+        a = self._axis(axis)
+        delta = (counts - a.encoder(now)) / a.ratio
+        if a.tracking:
+            a.begin(now, [], Motion.IDLE, final=float(round(a.position(now) + delta)))
+        else:
+            a.phys_offset += delta
+        self._sensors_changed(a, now)
+
+    def _sensors_changed(self, axis: Axis, now: float) -> None:
+        axis.sensor_check = self.clock.at_or_after(now)
+        axis.invalidate()
+        self.settle(now)
+
+    def _axis(self, letter: str) -> Axis:
+        a = self._by_letter.get(letter.upper())
+        if a is None:
+            raise ValueError(f"no axis {letter!r} on a {self.model.name}")
+        return a

@@ -1,0 +1,198 @@
+"""Queued motion: what an axis does when its queue reaches a move, a jog, a stream, a stop or a
+home search (PC48 §6.7–§6.9, §6.11, §6.20). Each op is ``fn(executor, axis, op, t)``."""
+
+from __future__ import annotations
+
+import math
+
+from omsd.engine import profiles as pf
+from omsd.engine.axis import Axis
+from omsd.engine.executor import Executor, OpFunction, Result, motion_wait
+from omsd.engine.queue import Op
+from omsd.engine.states import HomeSearch, Motion, Pending, Wait
+
+
+def _move_abs(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    axis.pending = Pending("abs", op.args[0], op.group)
+    return None
+
+
+def _move_rel(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    axis.pending = Pending("rel", op.args[0], op.group)
+    return None
+
+
+def _go(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    if op.group is not None:
+        return ex.arrive(axis, op, t)
+    if op.code == "GD":
+        ex.machine.clear_done([axis])
+    ex.start_pending([axis], t)
+    return motion_wait(axis)
+
+
+def _jog(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # PC48 §6.8: "will accelerate to the programmed velocity and run until altered";
+    # "Output events waiting for completion of JG will begin when JG is up to its requested
+    # velocity". The ramp is linear in every ramp mode (its queue table: "Linear ramp").
+    machine = ex.machine
+    v = axis.to_motor(op.args[0])
+    if machine.options.jog_disables_slip_detection:
+        axis.slip_detect = False
+    tick = machine.clock.at_or_after(t)
+    v0 = axis.velocity(tick)
+    if v:
+        axis.vl = abs(v)  # "This command modifies the move velocity parameter (VL)"; 0 stops
+    ramp = pf.velocity_change(v0, v, axis.ac)
+    if v == 0.0:
+        axis.begin(tick, ramp, Motion.STOP)
+        return motion_wait(axis)
+    axis.direction = 1 if v > 0 else -1
+    axis.begin(tick, [*ramp, pf.cruise(v)], Motion.JOG)
+    axis.home = None
+    at_speed = tick + sum(p.duration for p in ramp)
+    return Wait("time", until=machine.clock.at_or_after(at_speed))
+
+
+def _stream(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # PC48 §6.8: "generate a pulse train without acceleration or deceleration at the rates
+    # specified. The parameters are time in 1/1024 second sample intervals, X velocity, and
+    # Y velocity." If the stream runs dry the last rate continues ("slave mode").
+    machine = ex.machine
+    samples, vx, vy = op.args
+    tick = machine.clock.at_or_after(t)
+    for a, v in ((axis, vx), (machine.axis_by_letter("Y"), vy)):
+        if a is None:
+            continue
+        if v:
+            a.direction = 1 if v > 0 else -1
+            a.begin(tick, [pf.cruise(a.to_motor(v))], Motion.STREAM)
+        elif a.motion is Motion.STREAM or a is axis:
+            a.halt(tick)
+    until = tick + samples / machine.model.velocity_stream_rate
+    return Wait("time", until=until)
+
+
+def _one_step(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # "will output one step pulse in the current direction ... in one sample interval"
+    machine = ex.machine
+    tick = machine.clock.at_or_after(t)
+    rate = machine.model.sample_rate
+    x = axis.position(tick)
+    step = pf.cruise(axis.direction * rate, 1.0 / rate)
+    axis.begin(tick, [step], Motion.MOVE, final=x + axis.direction)
+    return Wait("motion")
+
+
+def _staircase(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # PC48 §6.20: run to the absolute position at the new velocity; control passes on when
+    # it is reached; "If a new MV command is sent after the controller has already passed
+    # the destination ... the controller will continue to move at the old velocity."
+    clock = ex.machine.clock
+    dest = axis.to_motor(op.args[0])
+    v = abs(axis.to_motor(op.args[1])) * axis.direction
+    tick = clock.at_or_after(t)
+    x = axis.position(tick)
+    if (dest - x) * axis.direction <= 0:
+        return None
+    v0 = axis.velocity(tick)
+    axis.begin(tick, [*pf.velocity_change(v0, v, axis.ac), pf.cruise(v)], Motion.STAIRCASE)
+    when = axis.traj.first_time(dest, axis.direction > 0, tick)
+    if when is None:
+        return Wait("motion")
+    return Wait("time", until=clock.at_or_after(when))
+
+
+def _stop_at(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # "stop at the specified position ... If there is insufficient distance to stop at the
+    # previously specified deceleration ... the controller will stop as soon as possible"
+    dest = float(math.trunc(axis.to_motor(op.args[0])))
+    tick = ex.machine.clock.at_or_after(t)
+    v0 = axis.velocity(tick)
+    if v0 == 0.0:
+        return None
+    x = axis.position(tick)
+    pieces = pf.stop_at(dest - x, v0, axis.ac)
+    reach = sum(p.x(p.duration) for p in pieces)
+    final = dest if abs(x + reach - dest) < 1e-6 else None
+    axis.begin(tick, pieces, Motion.STOP, final=final)
+    return motion_wait(axis)
+
+
+def _home(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    # PC48 §6.11: "step in the positive direction at the predefined velocity, until the home
+    # input line goes true. The position counter will be initialized to the position
+    # supplied ... The axis will not stop at home, but ... decelerates to a stop."
+    position, kill, direction = op.args
+    tick = ex.machine.clock.at_or_after(t)
+    ex.hold_off(axis)
+    v0 = axis.velocity(tick)
+    v = direction * axis.vl
+    axis.direction = direction
+    axis.begin(tick, [*pf.velocity_change(v0, v, axis.ac), pf.cruise(v)], Motion.HOME)
+    points: tuple[float, ...] = ()
+    if axis.home_encoder:
+        points = _index_points(axis, direction)
+    axis.home = HomeSearch(
+        position=position,
+        kill=kill,
+        direction=direction,
+        prev=axis.home_condition(tick),
+        index_points=points,
+    )
+    axis.home_last_phys = axis.phys(tick)
+    return Wait("motion")
+
+
+def _index_points(axis: Axis, direction: int) -> tuple[float, ...]:
+    """Encoder home mode: physical positions in the home window where the encoder index is."""
+    w = axis.world
+    cpr = w.encoder_counts_per_rev
+    if cpr <= 0 or axis.ratio <= 0:
+        return (math.inf * direction,)
+
+    def enc_at(p: float) -> float:
+        return axis.enc_base + axis.ratio * (p - axis.enc_phys)
+
+    lo, hi = sorted((enc_at(w.home_low), enc_at(w.home_high)))
+    first = math.ceil((lo - w.encoder_index) / cpr)
+    points: list[float] = []
+    k = first
+    while k * cpr + w.encoder_index < hi and len(points) < 64:
+        count = k * cpr + w.encoder_index
+        points.append(axis.enc_phys + (count - axis.enc_base) / axis.ratio)
+        k += 1
+    return tuple(points) or (math.inf * direction,)
+
+
+def _stop(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    kill = bool(op.args and op.args[0])
+    ex.hold_off(axis)
+    axis.home = None
+    if kill:
+        axis.halt(t)
+        return None
+    tick = ex.machine.clock.at_or_after(t)
+    if axis.motion is Motion.IDLE:
+        return None
+    axis.decelerate(tick)
+    return motion_wait(axis)
+
+
+MOTION_OPS: dict[str, OpFunction] = {
+    "MA": _move_abs,
+    "MT": _move_abs,
+    "MR": _move_rel,
+    "ML": _move_rel,
+    "GO": _go,
+    "GD": _go,
+    "JG": _jog,
+    "JF": _jog,
+    "VS": _stream,
+    "MO": _one_step,
+    "MV": _staircase,
+    "SP": _stop_at,
+    "FP": _stop_at,
+    "HM": _home,
+    "STOP": _stop,
+}

@@ -1,0 +1,156 @@
+"""The board's reactions to what happens by itself: a move ending, a look at the sensors, an
+armed interrupt firing, a settling time running out, a contour's outputs, a servo loop's check.
+
+Running into a limit (§6.5, §7.3.4: "When the board receives a limit signal from the platform,
+it flushes its command queue"), finding home (§6.11), detecting slip (§6.16) and the
+position-hold correction (§6.15) are here. The machine calls these when an axis's next event is
+due (:meth:`omsd.engine.machine.Machine.advance`).
+"""
+
+from __future__ import annotations
+
+from omsd.engine.axis import Axis
+from omsd.engine.backlash import take_up_backlash
+from omsd.engine.events import LimitEvent, ServoTripEvent, SlipEvent
+from omsd.engine.executor import Executor
+from omsd.engine.registers import DON_S, ENC_S, OVRT
+from omsd.engine.states import Motion
+
+
+def on_end(ex: Executor, axis: Axis, t: float) -> None:
+    """The trajectory has run out: the axis is at rest."""
+    motion = axis.motion
+    axis.settle(t)
+    if motion is Motion.HOLD:
+        axis.in_position = True
+        if axis.slip_detect:
+            axis.anchor_tracking(t)
+    else:
+        if axis.pa is not None and axis.aux == axis.pa:
+            if axis.se_ms:
+                axis.aux_timer = t + axis.se_ms / 1000.0
+            else:
+                axis.aux = not axis.pa
+        axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
+        axis.in_position = True
+        ex.check_hold(axis, t)
+    axis.invalidate()
+
+
+def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
+    axis.sensor_check = None
+    axis.invalidate()
+    machine = ex.machine
+    if axis.backlash:
+        take_up_backlash(axis, t)
+    for hook in ex.sensor_hooks:
+        hook(ex, axis, t)
+    if axis.motion not in (Motion.IDLE, Motion.STOP) and axis.limits_on:
+        direction = axis.direction_at(t)
+        if direction and axis.limit_active(direction, t):
+            _limit(ex, axis, direction, t)
+    if axis.home is not None and axis.motion is Motion.HOME:
+        _look_for_home(axis, t)
+    if axis.slip_detect and abs(axis.slip_error(t)) > axis.es:
+        axis.slip_detect = False
+        axis.slipped = True
+        machine.registers.status |= ENC_S | DON_S
+        machine.emit(SlipEvent(t, axis.letter))
+        if axis.slip_kill:
+            # "the axis will be killed as though a KL command had been issued"
+            axis.halt(t)
+            ex.flush(axis, t)
+    if axis.hold and axis.motion is Motion.IDLE:
+        ex.check_hold(axis, t)
+
+
+def _look_for_home(axis: Axis, t: float) -> None:
+    home = axis.home
+    assert home is not None
+    if home.index_points:
+        before, now = axis.home_last_phys, axis.phys(t)
+        axis.home_last_phys = now
+        lo, hi = sorted((before, now))
+        found = any(lo <= p <= hi for p in home.index_points) and axis.home_line_low(t)
+    else:
+        cond = axis.home_sensed(t)
+        found = cond and not home.prev
+        home.prev = cond
+    if not found:
+        return
+    axis.home = None
+    if home.kill:
+        axis.halt(t)  # "The position counter is not cleared or reset."
+        return
+    axis.load_counter(t, home.position)
+    axis.anchor_tracking(t)
+    axis.decelerate(t)
+
+
+def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
+    machine = ex.machine
+    axis.limit_latched = direction
+    ex.hold_off(axis)
+    if axis.servo is not None and axis.servo.closed:
+        # the loop "is disabled when ... a limit is encountered"
+        axis.servo_sync(t)
+        axis.servo.closed = False
+    # the soft-limit mode: "ramp down instead of terminating immediately. The output queue is
+    # not flushed except for the current move", for the motions the dialect names
+    if axis.soft_limit and axis.motion in machine.options.soft_limit_motions:
+        axis.decelerate(t)
+    else:
+        axis.halt(t)
+        ex.flush(axis, t)
+    machine.registers.status |= OVRT | DON_S
+    machine.emit(LimitEvent(t, axis.letter, direction))
+
+
+def on_aux_timer(ex: Executor, axis: Axis, t: float) -> None:
+    axis.aux_timer = None
+    if axis.pa is not None and axis.motion is Motion.IDLE:
+        axis.aux = not axis.pa
+    axis.invalidate()
+
+
+def on_outputs(ex: Executor, axis: Axis, t: float) -> None:
+    machine = ex.machine
+    while axis.outputs and axis.outputs[0][0] <= t + 1e-12:
+        _, (what, target, low) = axis.outputs.pop(0)
+        if what == "aux":
+            ex.set_aux(machine.axes[target], not low, t)
+        else:
+            machine.set_output(target, low=low, t=t)
+    axis.invalidate()
+
+
+def fire_in(ex: Executor, axis: Axis, t: float) -> None:
+    arm = axis.in_arm
+    axis.in_fire = None
+    axis.in_arm = None
+    axis.invalidate()
+    if arm is None:
+        return
+    group = arm[1]
+    ex.machine.set_done([axis], t, interrupt=False)
+    group.arrive(axis.index)
+    ex.check_group(group, t)
+
+
+def on_servo(ex: Executor, axis: Axis, t: float) -> None:
+    """A look at a servo axis's loop: "if the error is greater than 32768 then the controller
+    will disable the PID so that you don't have a runaway motor" (PCIx §2.7.2). The loop opens;
+    the commanded motion stops at once and the axis's queue is flushed, as a limit does, so that
+    nothing drives an axis nobody is holding."""
+    loop = axis.servo
+    assert loop is not None
+    axis.servo_sync(t)
+    if loop.tripped and not axis.servo_trip_reported:
+        # moving or holding: either way the axis is no longer under control
+        axis.servo_trip_reported = True
+        if axis.motion is not Motion.IDLE:
+            axis.halt(t)
+        ex.flush(axis, t)
+        ex.machine.emit(ServoTripEvent(t, axis.letter, loop.following_error))
+    axis.servo_last = loop.position
+    axis.invalidate()

@@ -1,0 +1,146 @@
+"""What happens next to an axis, found analytically.
+
+Everything that happens by itself (a move ends, a switch is reached, an interrupt threshold is
+passed, a settling time runs out, backlash is taken up) is found from the trajectory and
+quantized onto the sample grid, so the machine can sleep until then. :func:`next_event` returns
+the earliest such time and what it is; :class:`omsd.engine.axis.Axis` caches it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from omsd.engine.axis_state import STEP_EPS, AxisState
+from omsd.engine.backlash import backlash_tick
+from omsd.engine.states import Motion
+
+
+def next_event(axis: AxisState) -> tuple[float, str]:
+    best = (math.inf, "")
+    candidates: list[tuple[float | None, str]] = [
+        (axis.end_tick(), "end"),
+        (axis.sensor_check, "sensor"),
+        (axis.in_fire, "in"),
+        (axis.aux_timer, "aux"),
+        (axis.outputs[0][0] if axis.outputs else None, "output"),
+        (axis.servo_check_time(), "servo"),
+    ]
+    if axis.wait is not None and axis.wait.until is not None:
+        candidates.append((axis.wait.until, "wait"))
+    if axis.motion is not Motion.IDLE and axis.stall_phys is None:
+        candidates.append((_next_crossing(axis), "sensor"))
+    if axis.slip_detect and axis.stall_phys is not None and axis.motion is not Motion.IDLE:
+        candidates.append((_slip_crossing(axis), "sensor"))
+    if axis.backlash and axis.motion is not Motion.IDLE:  # a direction change
+        candidates.append((backlash_tick(axis), "sensor"))
+    for when, what in candidates:
+        if when is not None and when < best[0]:
+            best = (when, what)
+    return best
+
+
+def _levels(axis: AxisState, t: float) -> list[tuple[float, bool]]:
+    """Counter-frame positions whose crossing the board must notice, with the side that
+    counts (``True``: reaching at or above the level). Switches are seen through
+    :meth:`~AxisState.carriage` (whole steps): a switch at physical ``s`` closes on the first
+    whole step at or beyond it, which the continuous position reaches at ``step -+ STEP_EPS``."""
+    levels: list[tuple[float, bool]] = []
+    w = axis.world
+    p = axis.carriage(t)
+    off = axis.phys_offset
+    if axis.limits_on:
+        if p < w.positive_limit:  # active from the first step at or above the switch
+            levels.append(_step_at_or_above(w.positive_limit - off))
+        if p > w.negative_limit:  # active from the first step at or below it
+            levels.append(_step_at_or_below(w.negative_limit - off))
+        if axis.travel_limits is not None:
+            levels.extend((level - off, above) for level, above in _travel_levels(axis, t))
+    if axis.home is not None:
+        if axis.home.index_points:
+            x = axis.phys(t)
+            for point in axis.home.index_points:
+                levels.append((point - off, point > x))
+        else:
+            # activated while home_low <= carriage < home_high: each edge is crossed
+            # upwards at its first step at or above it, downwards at the step below it
+            for edge in (w.home_low, w.home_high):
+                if p < edge:
+                    levels.append(_step_at_or_above(edge - off))
+                else:
+                    levels.append(_step_below(edge - off))
+    return levels
+
+
+def _travel_levels(axis: AxisState, t: float) -> list[tuple[float, bool]]:
+    """Physical positions where a moving axis goes beyond its travel limits: the counter shows
+    ``upper + 1`` at ``upper + 1 - 1e-6`` on the way up."""
+    limits = axis.travel_limits
+    if limits is None or axis.motion not in (Motion.MOVE, Motion.JOG):
+        return []
+    lower, upper = limits
+    offset = axis.phys_offset
+    position = axis.counter(t)
+    levels: list[tuple[float, bool]] = []
+    if position <= upper:
+        levels.append((upper + 1.0 - 1e-6 + offset, True))
+    if position >= lower:
+        levels.append((lower - 1.0 + 1e-6 + offset, False))
+    return levels
+
+
+def first_tick(axis: AxisState, level_counter: float, above: bool, t_from: float) -> float | None:
+    """The first sample tick after ``t_from`` at which the position is at (or beyond) the
+    level."""
+    clock = axis.host.clock
+    traj = axis.traj
+    when = traj.first_time(level_counter, above, t_from)
+    while when is not None and math.isfinite(when):
+        tick = clock.at_or_after(when)
+        if tick <= t_from:
+            tick = clock.after(t_from)
+        x = traj.position(tick)
+        if (x >= level_counter) if above else (x <= level_counter):
+            return tick
+        nxt = traj.first_time(level_counter, above, tick)
+        if nxt is None or not math.isfinite(nxt) or nxt <= when:
+            return None if nxt is None else clock.after(tick)
+        when = nxt
+    return None
+
+
+def _next_crossing(axis: AxisState) -> float | None:
+    t = axis.host.now
+    best: float | None = None
+    for level, above in _levels(axis, t):
+        tick = first_tick(axis, level, above, t)
+        if tick is not None and (best is None or tick < best):
+            best = tick
+    return best
+
+
+def _slip_crossing(axis: AxisState) -> float | None:
+    t = axis.host.now
+    stall_enc = float(axis.encoder(t))
+    best: float | None = None
+    for sign in (1, -1):
+        # slip_error = stall_enc - track_enc - ratio (x - track_counter) crosses -/+ tolerance
+        level = axis.track_counter + (stall_enc - axis.track_enc + sign * axis.es) / axis.ratio
+        tick = first_tick(axis, level + sign * 1e-6, sign > 0, t)
+        if tick is not None and (best is None or tick < best):
+            best = tick
+    return best
+
+
+def _step_at_or_above(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first reaches ``level`` going up."""
+    return (math.ceil(level - 1e-9) - STEP_EPS, True)
+
+
+def _step_at_or_below(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first reaches ``level`` going down."""
+    return (math.floor(level + 1e-9) + STEP_EPS, False)
+
+
+def _step_below(level: float) -> tuple[float, bool]:
+    """The crossing at which the whole-step position first goes below ``level`` going down."""
+    return (math.ceil(level - 1e-9) - 1 + STEP_EPS, False)

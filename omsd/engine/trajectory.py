@@ -1,0 +1,215 @@
+"""A trajectory: where one axis is, as a function of time, and cuts of one.
+
+A :class:`Trajectory` is a start time, a start position and a sequence of pieces
+(:mod:`omsd.engine.pieces`). The board never integrates: asking where an axis is at any instant
+is a function call, and so is asking when it will reach a switch (:meth:`Trajectory.first_time`).
+The functions after the class cut trajectories into pieces again: the motion between two times
+(:func:`segment`, :func:`pieces_between`), the same motion with its positions shifted
+(:func:`rebased`).
+"""
+
+from __future__ import annotations
+
+import bisect
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import replace
+
+from omsd.engine.pieces import Cosine, Decay, Piece, Poly, Shifted, Sinusoid, Window, cruise
+
+_BISECT_ITERATIONS = 80
+
+
+class Trajectory:
+    """Position of one axis as a function of time: ``x0`` at ``t0``, then the pieces in turn.
+
+    After the last (finite) piece the axis rests at ``final``; it defaults to the sum of the
+    displacements but is normally given exactly (an integer step count), so that float noise in
+    the pieces never shows in the position counter.
+    """
+
+    __slots__ = ("_offsets", "_starts", "duration", "end_time", "final", "pieces", "t0", "x0")
+
+    def __init__(
+        self, t0: float, x0: float, pieces: Sequence[Piece] = (), final: float | None = None
+    ) -> None:
+        self.t0 = t0
+        self.x0 = x0
+        self.pieces = tuple(p for p in pieces if p.duration > 0.0)
+        starts: list[float] = []
+        offsets: list[float] = []
+        t = 0.0
+        x = x0
+        for p in self.pieces:
+            starts.append(t)
+            offsets.append(x)
+            t += p.duration
+            if math.isfinite(p.duration):
+                x += p.x(p.duration)
+        self._starts = starts
+        self._offsets = offsets
+        self.duration = t
+        self.end_time = t0 + t
+        if final is None:
+            final = x if math.isfinite(t) else math.nan
+        self.final = final
+
+    @classmethod
+    def at_rest(cls, t0: float, x: float) -> Trajectory:
+        return cls(t0, x, (), final=x)
+
+    @property
+    def is_finite(self) -> bool:
+        return math.isfinite(self.duration)
+
+    def _locate(self, t: float) -> tuple[int, float]:
+        """Index of the piece running at ``t`` and the time into it; (-1, 0) before or after.
+        At ``t0`` itself the first piece is running: a trajectory may begin in motion."""
+        rel = t - self.t0
+        if rel < 0.0 or not self.pieces or rel >= self.duration:
+            return -1, 0.0
+        i = bisect.bisect_right(self._starts, rel) - 1
+        return i, rel - self._starts[i]
+
+    def position(self, t: float) -> float:
+        if t <= self.t0:
+            return self.x0
+        if t >= self.end_time:
+            return self.final
+        i, tau = self._locate(t)
+        return self._offsets[i] + self.pieces[i].x(tau)
+
+    def velocity(self, t: float) -> float:
+        i, tau = self._locate(t)
+        return 0.0 if i < 0 else self.pieces[i].v(tau)
+
+    def acceleration(self, t: float) -> float:
+        i, tau = self._locate(t)
+        return 0.0 if i < 0 else self.pieces[i].a(tau)
+
+    def moving_at(self, t: float) -> bool:
+        return self.t0 <= t < self.end_time and bool(self.pieces)
+
+    def first_time(self, level: float, above: bool, t_from: float) -> float | None:
+        """Earliest time ``>= t_from`` at which the position reaches ``level`` from the side
+        opposite to ``above`` (``above=True``: first time ``x >= level``).
+
+        The answer is the analytic instant; callers quantize it onto the sample grid.
+        """
+
+        def hit(x: float) -> bool:
+            return x >= level if above else x <= level
+
+        t_from = max(t_from, self.t0)
+        if hit(self.position(t_from)):
+            return t_from
+        rel_from = t_from - self.t0
+        for i, piece in enumerate(self.pieces):
+            start = self._starts[i]
+            end = start + piece.duration
+            if end <= rel_from:
+                continue
+            base = self._offsets[i]
+            lo = max(0.0, rel_from - start)
+            if math.isinf(piece.duration):
+                v = piece.v(lo)
+                x_lo = base + piece.x(lo)
+                if v == 0.0 or (v > 0) != above:
+                    return None
+                return self.t0 + start + lo + (level - x_lo) / v
+            bounds = [lo, *[tp for tp in piece.turning_points() if tp > lo], piece.duration]
+            for a, b in itertools.pairwise(bounds):
+                if not hit(base + piece.x(b)):
+                    continue
+                for _ in range(_BISECT_ITERATIONS):
+                    mid = (a + b) / 2.0
+                    if hit(base + piece.x(mid)):
+                        b = mid
+                    else:
+                        a = mid
+                    if b - a < 1e-13:
+                        break
+                return self.t0 + start + b
+        if self.pieces and self.is_finite and hit(self.final):
+            return self.end_time
+        return None
+
+
+def segment(traj: Trajectory, a: float, b: float) -> list[Piece]:
+    """The motion of ``traj`` from ``a`` to ``b`` as pieces (rest included)."""
+    out: list[Piece] = []
+    span = b - a
+    acc = 0.0
+    rel = a - traj.t0
+    start = 0.0
+    for piece in traj.pieces:
+        end = start + piece.duration
+        if end <= rel:
+            start = end
+            continue
+        cut = max(0.0, rel - start)
+        rest = tail(piece, cut)
+        length = min(rest.duration, span - acc)
+        out.append(replace(rest, duration=length))  # type: ignore[type-var]
+        acc += length
+        start = end
+        if acc >= span:
+            return out
+    if acc < span:
+        out.append(cruise(0.0, span - acc))
+    return out
+
+
+def rebased(traj: Trajectory, t: float, shift: float) -> Trajectory:
+    """The same motion continued from ``t`` with every position shifted by ``shift``."""
+    rel = t - traj.t0
+    pieces: list[Piece] = []
+    acc = 0.0
+    for piece in traj.pieces:
+        if acc + piece.duration <= rel:
+            acc += piece.duration
+            continue
+        cut = max(0.0, rel - acc)
+        pieces.append(tail(piece, cut))
+        acc += piece.duration
+    final = traj.final + shift if math.isfinite(traj.final) else None
+    return Trajectory(t, traj.position(t) + shift, pieces, final)
+
+
+def tail(piece: Piece, cut: float) -> Piece:
+    """The part of ``piece`` after ``cut``, as a piece of its own."""
+    if cut == 0.0:
+        return piece
+    rest = piece.duration - cut
+    if isinstance(piece, Poly):
+        return Poly(piece.v(cut), piece.a(cut), piece.j, rest)
+    if isinstance(piece, Cosine):
+        return Shifted(piece, cut, rest)
+    if isinstance(piece, Decay):
+        return Decay(piece.e0 * math.exp(-piece.k * cut), piece.k, rest)
+    if isinstance(piece, Sinusoid):
+        return Sinusoid(piece.r, piece.phase0 + piece.omega * cut, piece.omega, rest)
+    return Shifted(piece, cut, rest)
+
+
+def window(piece: Piece, k: float, cut: float, duration: float) -> Piece:
+    if k == 1.0 and cut == 0.0 and duration == piece.duration:
+        return piece
+    return Window(piece, k, cut, duration, piece.x(cut))
+
+
+def pieces_between(traj: Trajectory, a: float, b: float, k: float = 1.0) -> list[Piece]:
+    """The motion of ``traj`` from time ``a`` to ``b`` (``b`` may be infinite), scaled by ``k``;
+    nothing for the time it is at rest after its end."""
+    out: list[Piece] = []
+    start = traj.t0
+    for piece in traj.pieces:
+        end = start + piece.duration
+        lo, hi = max(a, start), min(b, end)
+        if hi > lo:
+            out.append(window(piece, k, lo - start, hi - lo))
+        start = end
+        if start >= b:
+            break
+    return out
