@@ -28,6 +28,7 @@ from bench import (
     latency,
     peers,
     procs,
+    replay,
     scale,
     startup,
     throughput,
@@ -51,6 +52,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "startup": startup.run,
     "isolation": isolation.run,
     "churn": isolation.churn,
+    "replay": replay.run,
 }
 OPTIONAL: dict[str, Benchmark] = {"peers": peers.run}
 

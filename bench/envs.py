@@ -99,7 +99,22 @@ def omsd_venv(version: str) -> Path:
     python = find_python(version)
     if python is None:
         raise Unavailable(f"no python{version} here (PATH, pyenv)")
-    return venv(f"python{version}", python, _pinned(["rich", "aiomqtt"]))
+    return venv(f"python{version}", python, _pinned(runtime_dependencies()))
+
+
+def runtime_dependencies() -> list[str]:
+    """The names of omsd's runtime dependencies, as the installed checkout declares them
+    (``pyproject.toml``'s ``dependencies``; no extras)."""
+    import re
+
+    names = []
+    for requirement in metadata.requires("omsd") or []:
+        if "extra ==" in requirement:
+            continue
+        match = re.match(r"[A-Za-z0-9._-]+", requirement)
+        if match:
+            names.append(match.group(0))
+    return names
 
 
 def uvloop_path() -> tuple[str, ...] | None:

@@ -14,8 +14,12 @@ blocks of :data:`BLOCK`, so they all see the same machine:
 * the same with an ``asyncio.BufferedProtocol`` reading into one reused buffer (``buffered``):
   what reading into a reused buffer buys, against asyncio's fresh 256 KiB per read;
 * the floor: a blocking socket (a blocking pty) and a thread, no event loop (:mod:`bench.floor`);
-* with uvloop (``--fast``, or when it can be imported): omsd as users run it and the plain echo,
-  each on a uvloop loop (:mod:`bench.fastloop`).
+* with uvloop (``--fast``, or when it can be imported): omsd as users run it with
+  ``--loop uvloop`` (``pip install omsd[fast]``), and the plain echo on a uvloop loop
+  (:mod:`bench.fastloop`).
+
+omsd's own rows name asyncio's loop (``--loop asyncio``, what the default ``auto`` gives where
+uvloop is not installed).
 
 Targets (issue 16): omsd as users run it <= 1.10x the plain echo's median on TCP, <= 1.30x on
 the pty; the driver link <= 1.10x the raw link; the default view <= 1.05x the view off. p99:
@@ -25,6 +29,7 @@ the pty; the driver link <= 1.10x the raw link; the default view <= 1.05x the vi
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import re
 import time
@@ -151,7 +156,8 @@ class Servers:
 
 
 def fast_python(settings: Settings) -> tuple[procs.Python | None, str]:
-    """The interpreter with uvloop for the fast-loop rows, or None and why not."""
+    """This interpreter with uvloop on its path for the fast-loop rows (the baselines are run on
+    uvloop by :mod:`bench.fastloop`, omsd by its own ``--loop uvloop``), or None and why not."""
     path = envs.uvloop_path()
     if path is None and settings.fast:
         try:
@@ -172,9 +178,10 @@ def start(settings: Settings, directory: Path, stack: contextlib.ExitStack) -> t
 
     raw = procs.BoardSpec("latency", "PC48-4E", "raw", pty=True)
     driver = procs.BoardSpec("latency", "PC48-4E", "driver", pty=True)
-    add("omsd", procs.omsd([raw], directory, view="auto"), RAW_REPLY)
-    add("omsd-off", procs.omsd([raw], directory), RAW_REPLY)
-    add("omsd-driver", procs.omsd([driver], directory), DRIVER_REPLY)
+    # asyncio's loop, named: what --loop auto gives where uvloop is not installed
+    add("omsd", procs.omsd([raw], directory, view="auto", loop="asyncio"), RAW_REPLY)
+    add("omsd-off", procs.omsd([raw], directory, loop="asyncio"), RAW_REPLY)
+    add("omsd-driver", procs.omsd([driver], directory, loop="asyncio"), DRIVER_REPLY)
     for key, link in (("omsd", "raw"), ("omsd-off", "raw"), ("omsd-driver", "driver")):
         with TcpPort(s.started[key].tcp()) as port:
             got = first_reply(port, link)
@@ -187,7 +194,12 @@ def start(settings: Settings, directory: Path, stack: contextlib.ExitStack) -> t
     add("floor", procs.floor(directory, RAW_REPLY), RAW_REPLY)
     fast, why = fast_python(settings)
     if fast is not None:
-        add("omsd-uvloop", procs.omsd([raw], directory, view="auto", python=fast), RAW_REPLY)
+        on_path = dataclasses.replace(fast, fast=False)  # omsd chooses uvloop itself
+        add(
+            "omsd-uvloop",
+            procs.omsd([raw], directory, view="auto", python=on_path, loop="uvloop"),
+            RAW_REPLY,
+        )
         add(
             "echo-uvloop",
             procs.echo(directory, tcp=1, pty=1, reply=RAW_REPLY, python=fast),

@@ -312,12 +312,14 @@ def omsd(
     view: str = "off",
     python: Python = HERE,
     timeout: float = TIMEOUT,
+    loop: str | None = None,
 ) -> Server:
     """Start omsd on ``boards``: each on a free TCP port (and a pty in ``directory`` if asked).
     ``view="off"``: no live view and no control socket, omsd stripped to its boards. Any other
     ``view`` (``"auto"``: omsd as users run it) keeps the default live view, which with standard
     error in a file is the plain lines systemd's journal gets, and a control socket in
-    ``directory``, as the defaults have it."""
+    ``directory``, as the defaults have it. ``loop``: omsd's ``--loop`` (None: its default,
+    auto, which is asyncio's loop unless uvloop can be imported)."""
     stamp = time.monotonic_ns()
     lines = [f'[log]\nview = "{view}"\n']
     if view == "off":
@@ -333,9 +335,8 @@ def omsd(
     config = directory / f"omsd-{len(boards)}-{stamp}.toml"
     config.write_text("".join(lines))
     expect = sum(b.tcp for b in boards) + sum(b.pty for b in boards)
-    return Server(
-        "omsd", ["--config", str(config)], expect, name="omsd", python=python, timeout=timeout
-    )
+    args = ["--config", str(config)] + (["--loop", loop] if loop is not None else [])
+    return Server("omsd", args, expect, name="omsd", python=python, timeout=timeout)
 
 
 def echo(

@@ -24,6 +24,7 @@ from pathlib import Path
 from bench import procs
 from bench.ports import TcpPort
 from bench.settings import Settings
+from bench.startup import current_bytecode
 from bench.table import Row, Target
 
 MODEL = "PC48-8"
@@ -57,6 +58,7 @@ def boards(n: int) -> list[procs.BoardSpec]:
 
 
 def run(settings: Settings, directory: Path) -> list[Row]:
+    current_bytecode()
     n = settings.scale_boards
     seconds = settings.scale_idle_seconds
     with procs.omsd(boards(n), directory, view="auto", timeout=READY_TIMEOUT) as server:

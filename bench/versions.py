@@ -34,7 +34,7 @@ def one(version: str, settings: Settings, directory: Path) -> Row:
     board = procs.BoardSpec("versions", "PC48-4E", "raw")
     n = settings.versions_samples
     with (
-        procs.omsd([board], directory, view="auto", python=python) as omsd,
+        procs.omsd([board], directory, view="auto", python=python, loop="asyncio") as omsd,
         procs.echo(directory, tcp=1, reply=RAW_REPLY, python=python) as echo,
         TcpPort(omsd.tcp()) as ours,
         TcpPort(echo.tcp()) as theirs,

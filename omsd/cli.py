@@ -28,29 +28,30 @@ during start-up.
 from __future__ import annotations
 
 import argparse
-import asyncio
+import gc
 import os
 import sys
 
 from omsd import __version__
-from omsd.config import (
+from omsd.defaults import (
+    CONSOLE_WAIT,
     DEFAULT_EOS,
     DEFAULT_HOST,
     DEFAULT_LINK,
     DEFAULT_MODEL,
     DEFAULT_TCP_PORT,
     DEFAULT_VIEW,
+    LINKS,
+    LOOPS,
     VIEWS,
-    ConfigError,
-    from_options,
-    load_config,
-    with_control_option,
-    with_state_option,
 )
-from omsd.console import DEFAULT_WAIT as DEFAULT_CONSOLE_WAIT
 from omsd.helptext import HelpFormatter, examples
-from omsd.link import KINDS
-from omsd.models import MODELS, UnknownModel, get_model
+
+# Each command imports what it uses when it runs (issue 16: ``omsd --help``, ``omsd models`` and
+# ``omsd ctl`` within 3x ``python -c pass``): the parser needs argparse and the defaults it
+# quotes (omsd.defaults); ``omsd models`` the model rows; ``omsd ctl`` the control client;
+# ``omsd config`` and serving the configuration (omsd.config), and serving asyncio, the engine
+# and the daemon. tests/test_import_boundaries.py holds each command to what it may import.
 
 
 class _Parser(argparse.ArgumentParser):
@@ -62,7 +63,8 @@ def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="omsd",
         usage="omsd [--config FILE | --board MODEL --tcp [HOST:]PORT ...] [OPTIONS]\n"
-        "       omsd {models,commands,console,config,ctl} ...",
+        "       omsd {models,commands,console,config,ctl} ...\n"
+        "       omsd {record,replay} ...",
         description="Virtual Oregon Micro Systems motion controllers (PC48, PC46, VS4,\n"
         "PCIx), served over pty and TCP. With no COMMAND, serve the boards until\n"
         "Ctrl-C or SIGTERM: one line per endpoint on standard output (board, model,\n"
@@ -109,7 +111,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--link",
-        choices=KINDS,
+        choices=LINKS,
         help="driver: the DOS driver's conventions (markers # @ $ !, end character); raw: the"
         f" board's own stream (default: {DEFAULT_LINK})",
     )
@@ -146,6 +148,13 @@ def _parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="keep the boards' flash (AP defaults, macros 5-24) in FILE across restarts"
         " (default: none, flash lasts as long as the daemon)",
+    )
+    p.add_argument(
+        "--loop",
+        choices=LOOPS,
+        default="auto",
+        help="the event loop: auto is uvloop where it is installed (pip install 'omsd[fast]'),"
+        " else asyncio's own (default: auto)",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands", prog="omsd")
     sub.add_parser(
@@ -211,12 +220,16 @@ def _parser() -> argparse.ArgumentParser:
     console.add_argument(
         "--wait",
         type=_seconds,
-        default=DEFAULT_CONSOLE_WAIT,
+        default=CONSOLE_WAIT,
         metavar="S",
         help="at the end of a file or pipe, how long motion still running may take"
-        f" (default: {DEFAULT_CONSOLE_WAIT:g} s)",
+        f" (default: {CONSOLE_WAIT:g} s)",
     )
     _config_parser(sub)
+    from omsd.recording.cli import add_record_parser, add_replay_parser  # (argparse only)
+
+    add_record_parser(sub)
+    add_replay_parser(sub)
     # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
     ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
     ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
@@ -289,7 +302,7 @@ def _config_parser(sub: argparse._SubParsersAction[_Parser]) -> None:
 
 def _config(args: argparse.Namespace) -> int:
     """``omsd config check|show|schema``: 0, or 2 and one line for an invalid file."""
-    from omsd.config import render
+    from omsd.config import ConfigError, load_config, render
 
     if args.config_command == "schema":
         text = render.json_schema_text() if args.format == "json" else render.reference()
@@ -329,6 +342,8 @@ def main(argv: list[str] | None = None) -> int:
         print("omsd: ctl must come first: omsd ctl [OPTIONS] COMMAND", file=sys.stderr)
         return 2
     if args.command == "models":
+        from omsd.models import MODELS
+
         for model in MODELS.values():
             print(f"{model.name:<10} {model.description}")
         return 0
@@ -336,7 +351,17 @@ def main(argv: list[str] | None = None) -> int:
         return _commands(args.model, args.grep)
     if args.command == "config":
         return _config(args)
+    if args.command == "record":
+        from omsd.recording.cli import run_record
+
+        return run_record(args)
+    if args.command == "replay":
+        from omsd.recording.cli import run_replay
+
+        return run_replay(args)
     if args.command == "console":
+        from omsd.models import UnknownModel, get_model
+
         try:
             model = get_model(args.console_board)
         except UnknownModel as exc:
@@ -352,6 +377,7 @@ def _commands(name: str, grep: str | None) -> int:
     """``omsd commands MODEL [--grep TEXT]``: 0, or 1 when nothing matches (as grep), 2 for an
     unknown model."""
     from omsd.commands import format_listing, listing
+    from omsd.models import UnknownModel, get_model
 
     try:
         model = get_model(name)
@@ -374,7 +400,28 @@ def _commands(name: str, grep: str | None) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
+    # no cyclic garbage collection while omsd starts (imports, configuration, boards: nearly
+    # everything made is kept); Daemon(freeze=True) turns it back on once the boards are up
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        return _start_and_serve(args)
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def _start_and_serve(args: argparse.Namespace) -> int:
+    from omsd.config import (
+        ConfigError,
+        from_options,
+        load_config,
+        with_control_option,
+        with_state_option,
+    )
     from omsd.daemon import Daemon, StartupError
+    from omsd.loops import LoopUnavailable, run
+    from omsd.loops import loop_factory as event_loop
     from omsd.telemetry.traffic import TrafficLog
 
     try:
@@ -394,6 +441,11 @@ def _serve(args: argparse.Namespace) -> int:
     except ConfigError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
+    try:
+        loop_factory, _ = event_loop(args.loop)
+    except LoopUnavailable as exc:
+        print(f"omsd: {exc}", file=sys.stderr)
+        return 2
     log_file = args.log if args.log else config.log.file
     view = args.view or config.log.view
     try:
@@ -402,7 +454,7 @@ def _serve(args: argparse.Namespace) -> int:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
     try:
-        asyncio.run(Daemon(config, log).run())
+        run(Daemon(config, log, freeze=True).run(), loop_factory)
     except StartupError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return exc.status

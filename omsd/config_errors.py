@@ -29,7 +29,6 @@ key itself, else the nearest enclosing table or key written in the file (a key t
 
 from __future__ import annotations
 
-import datetime
 import json
 import math
 import re
@@ -184,6 +183,8 @@ def show(value: object, shorten: bool = True) -> str:
         if len(value) > MAX_ITEMS:
             pairs.append("...")
         return "{" + ", ".join(pairs) + "}" if pairs else "{}"
+    import datetime  # here: omsd.config imports this module, and a daemon needs no datetime
+
     if isinstance(value, datetime.date | datetime.time):
         return value.isoformat()
     return repr(value)

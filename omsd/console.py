@@ -25,9 +25,10 @@ from typing import BinaryIO, TextIO
 
 from omsd.board import Board, Reply
 from omsd.board.events import describe
+from omsd.defaults import CONSOLE_WAIT
 from omsd.models import Model
 
-DEFAULT_WAIT = 30.0  # seconds after the end of the input, at most, for the board to come to rest
+DEFAULT_WAIT = CONSOLE_WAIT  # seconds after the end of the input, at most, for the board to rest
 
 
 def _selectable(fd: int) -> bool:

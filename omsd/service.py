@@ -2,7 +2,7 @@
 
 The board engine is pure; this is where it meets real time. Every time a client writes, and
 whenever the board's own next deadline comes (a move ends, a switch is reached, a WT runs
-out), :meth:`BoardService.service` lets the board run to ``loop.time()`` and hands what the
+out), :meth:`BoardService.service` lets the board run to the time now and hands what the
 board said to every client attached to it. Between those moments nothing runs: an idle board
 costs nothing (no tick loop).
 
@@ -36,6 +36,7 @@ from omsd.faults import Faults
 from omsd.link import Link, make_link
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
 from omsd.timebase import Timebase
+from omsd.wakeups import Handle, wakeups_for
 
 #: Host bytes offered to a board in one go; the rest waits for the next turn of the event loop.
 FEED_BITE = 4096
@@ -97,10 +98,12 @@ class BoardService:
         self.name = config.name
         self.loop = loop
         self.log = log
-        # the board runs on the loop's monotonic clock (so loop.call_at can wake it exactly)
-        # unless the control API pauses, steps or scales its time
-        self.timebase = Timebase(loop.time)
+        # the board runs on the monotonic clock (asyncio's loop.time(); to the nanosecond under
+        # uvloop too) unless the control API pauses, steps or scales its time; its deadlines
+        # wake it through the loop's timerfd (omsd.wakeups), on time to tens of microseconds
+        self.timebase = Timebase(time.monotonic)
         self.clock = self.timebase.now
+        self._timers = wakeups_for(loop)
         self.faults = Faults()
         self.observers: list[Observer] = []
         self._inbound = bytearray()  # host bytes on a faulty cable, not yet at the board
@@ -117,13 +120,27 @@ class BoardService:
         self.clients: list[Client] = []
         self._waiting: list[Client] = []
         self.active: Client | None = None  # the client that last wrote: the board's own output
-        self._timer: asyncio.TimerHandle | None = None
+        self._timer: Handle | None = None
+        self._timer_at: float | None = None  # the monotonic time the board is woken at
         self._closed = False
         self._sessions = itertools.count(1)
         self._live: dict[int, Client] = {}  # session -> its client, while it is there
         self._gone: OrderedDict[int, str] = OrderedDict()  # session -> label, recently gone
         self._inbound_sessions: deque[list[int]] = deque()  # [session, count] of _inbound
         self._lingering: dict[int, tuple[Lingering, asyncio.TimerHandle]] = {}
+
+    @property
+    def faults(self) -> Faults:
+        """The cable's faults (control API); :meth:`set_faults` changes them."""
+        return self._faults
+
+    @faults.setter
+    def faults(self, faults: Faults) -> None:
+        self._faults = faults
+        # the fast path's test: a whole cable with nothing on it (see feed and _route)
+        self._clean = (
+            faults.cable and not faults.damaging and faults.baud is None and faults.latency <= 0
+        )
 
     # -- clients --------------------------------------------------------------------------------
 
@@ -218,31 +235,48 @@ class BoardService:
             )
             client.finish()
 
-    def _record(self, record: Traffic) -> None:
-        self.log.record(record)
-        for observer in list(self.observers):
-            observer.traffic(self, record)
+    def _traffic(self, label: str, direction: Direction, data: bytes) -> None:
+        """A chunk of traffic for the log and the observers; no record is made for nobody."""
+        log = self.log
+        observers = self.observers
+        if not (observers or log.wants_traffic):
+            return
+        t = time.time()
+        log.traffic(t, self.name, label, direction, data)
+        if observers:
+            record = Traffic(t, self.name, label, direction, data)
+            for observer in list(observers):
+                observer.traffic(self, record)
 
     def feed(self, client: Client, data: bytes) -> int:
         """Bytes a client wrote; returns how many the link took (the client keeps the rest and
-        stops reading until :meth:`Client.input_room` is called)."""
+        stops reading until :meth:`Client.input_room` is called).
+
+        The log is held meanwhile: the lines of the bytes in, the replies, the events, are made
+        and written after the replies have gone to the client (issue 16)."""
         if self._closed:
             return 0
-        faults = self.faults
-        if not faults.cable:
-            return len(data)  # into a cut cable: lost
-        if faults.damaging or faults.baud is not None:
-            return self._feed_faulty(client, data)
-        # a bite at a time: a client that wrote megabytes gets the rest taken on later turns of
-        # the loop, so the other boards are served in between
-        taken = self.link.from_host(data[:FEED_BITE], self.clock(), client.session)
-        if taken:
-            self.active = client
-            chunk = data[:taken]
-            self._record(Traffic(time.time(), self.name, client.label, Direction.IN, chunk))
-        if taken < len(data) and client not in self._waiting:
-            self._waiting.append(client)
-        self.service()
+        if not self._clean:
+            faults = self.faults
+            if not faults.cable:
+                return len(data)  # into a cut cable: lost
+            if faults.damaging or faults.baud is not None:
+                return self._feed_faulty(client, data)
+        log = self.log
+        log.hold()
+        try:
+            # a bite at a time: a client that wrote megabytes gets the rest taken on later turns
+            # of the loop, so the other boards are served in between
+            now = self.clock()
+            taken = self.link.from_host(data[:FEED_BITE], now, client.session)
+            if taken:
+                self.active = client
+                self._traffic(client.label, Direction.IN, data[:taken])
+            if taken < len(data) and client not in self._waiting:
+                self._waiting.append(client)
+            self._run(now)  # service() at the time the bytes were taken, already held
+        finally:
+            log.release()
         return taken
 
     def _feed_faulty(self, client: Client, data: bytes) -> int:
@@ -253,7 +287,7 @@ class BoardService:
         if room <= 0:
             return 0  # the wire is full: the client waits (input_room when it drains)
         data = data[:room]
-        self._record(Traffic(time.time(), self.name, client.label, Direction.IN, data))
+        self._traffic(client.label, Direction.IN, data)
         damaged = self.faults.damage(data)
         self._inbound += damaged
         runs = self._inbound_sessions
@@ -327,10 +361,18 @@ class BoardService:
     # -- time -----------------------------------------------------------------------------------
 
     def service(self) -> None:
-        """Let the board run to now; deliver its output; schedule the next wake-up."""
+        """Let the board run to now; deliver its output; schedule the next wake-up. The log is
+        held meanwhile (its lines are written after the output)."""
         if self._closed:
             return
-        now = self.clock()
+        log = self.log
+        log.hold()
+        try:
+            self._run(self.clock())
+        finally:
+            log.release()
+
+    def _run(self, now: float) -> None:
         try:
             out = self.link.to_host(now)
         except Exception:  # a bug in the engine must not take the daemon down
@@ -341,8 +383,9 @@ class BoardService:
             self.log.info(f"{self.name}: {self.link.kind} link: {note}")
         for event in out.events:
             self.log.event(time.time(), self.name, describe(event))
-            for observer in list(self.observers):
-                observer.event(self, now, event)
+            if self.observers:
+                for observer in list(self.observers):
+                    observer.event(self, now, event)
         for session, data in out.pieces:
             self._route(session, data)
         if self._waiting:
@@ -363,35 +406,48 @@ class BoardService:
         """Output of ``session`` to its client; the board's own (0) to the last writer."""
         client = self._live.get(session) if session else self.active
         if client is not None:
-            self._record(Traffic(time.time(), self.name, client.label, Direction.OUT, data))
-            self._deliver(client, data)
+            self._traffic(client.label, Direction.OUT, data)
+            if self._clean:
+                client.send(data)  # the fast path: nothing on the cable
+            else:
+                self._deliver(client, data)
             return
         gone = self._gone.get(session) if session else None
         label = f"(gone: {gone})" if gone is not None else "(no client)"
-        self._record(Traffic(time.time(), self.name, label, Direction.OUT, data))
+        self._traffic(label, Direction.OUT, data)
         if gone is not None:
             self.log.info(f"{self.name}: discarded {len(data)} bytes for {gone}: it has gone")
 
     def _reschedule(self) -> None:
+        if not self._closed and self.observers:
+            for observer in list(self.observers):
+                observer.changed(self)
+        deadline = None if self._closed else self.link.next_deadline()
+        # when, on the monotonic clock, the board is next to be woken (None: time is paused or
+        # nothing happens by itself)
+        at = None if deadline is None else self.timebase.to_loop(deadline)
+        if at == self._timer_at and self._timer is not None:
+            return  # woken then already
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
-        if not self._closed:
-            for observer in list(self.observers):
-                observer.changed(self)
-        deadline = self.link.next_deadline()
-        if deadline is None or self._closed:
+            self._timer_at = None
+        if at is None:
             return
-        at = self.timebase.to_loop(deadline)
-        if at is None:  # time is paused: nothing happens by itself
-            return
-        self._timer = self.loop.call_at(max(at, self.loop.time()), self.service)
+        self._timer = self._timers.call_at(at, self._wake)
+        self._timer_at = at
+
+    def _wake(self) -> None:
+        self._timer = None
+        self._timer_at = None
+        self.service()
 
     def close(self) -> None:
         self._closed = True
         if self._timer is not None:
             self._timer.cancel()
             self._timer = None
+            self._timer_at = None
         if self._in_timer is not None:
             self._in_timer.cancel()
             self._in_timer = None

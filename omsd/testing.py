@@ -713,3 +713,40 @@ def pytest_runtest_makereport(
 
 
 __all__ = ["Board", "Connection", "Omsd", "OmsdBoards", "omsd_boards"]
+
+
+# -- recordings (issue 17) ----------------------------------------------------------------------
+
+
+def assert_replays(
+    path: str | Path,
+    *,
+    model: str | None = None,
+    config: str | Path | None = None,
+    board: str | None = None,
+    tolerance: float | None = None,
+    time_tolerance: float | None = None,
+) -> None:
+    """Replay the recording at ``path`` (``omsd record``'s, or an ``omsd --log`` file) through
+    the emulator, as ``omsd replay`` does, and fail with the table of differences if what omsd
+    answers is not what the card answered::
+
+        assert_replays("tests/sessions/homing.jsonl")
+
+    ``model``, ``config`` and ``board`` are ``omsd replay``'s ``--model``, ``--config`` and
+    ``--board``; ``tolerance`` (steps) and ``time_tolerance`` (seconds) its ``--tolerance`` and
+    ``--time-tolerance`` (default: theirs). A file that is no recording raises
+    :class:`omsd.recording.format.RecordingError` (one line)."""
+    from omsd.recording.compare import DEFAULT_SECONDS, DEFAULT_STEPS, Tolerance
+    from omsd.recording.replay import replay_file
+
+    limits = Tolerance(
+        DEFAULT_STEPS if tolerance is None else tolerance,
+        DEFAULT_SECONDS if time_tolerance is None else time_tolerance,
+    )
+    result = replay_file(path, model=model, config=config, board=board, tolerance=limits)
+    if not result.ok:
+        raise AssertionError(f"{path} does not replay:\n{result.report()}")
+
+
+__all__ += ["assert_replays"]

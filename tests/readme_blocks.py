@@ -154,7 +154,18 @@ def blocks(path: Path = README) -> list[Block]:
 
 
 SUBCOMMANDS = frozenset(
-    {"models", "console", "ctl", "commands", "config", "-h", "--help", "--version"}
+    {
+        "models",
+        "console",
+        "ctl",
+        "commands",
+        "config",
+        "record",
+        "replay",
+        "-h",
+        "--help",
+        "--version",
+    }
 )
 
 

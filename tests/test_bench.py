@@ -88,6 +88,7 @@ ROWS = [
     ),
     "churn, tcp: connect, RP, close / echo",
     "churn, pty: open, RP, close / echo",
+    "replay of a 10-minute recorded session",
 ]
 
 MAY_BE_SKIPPED = {name for name in ROWS if "uvloop" in name or "Python 3.1" in name}

@@ -876,7 +876,7 @@ def _serve(monkeypatch: pytest.MonkeyPatch, argv: list[str]) -> DaemonConfig:
     served: list[DaemonConfig] = []
 
     class Daemon:
-        def __init__(self, config: DaemonConfig, log: object) -> None:
+        def __init__(self, config: DaemonConfig, log: object, **options: object) -> None:
             served.append(config)
 
         async def run(self) -> None:

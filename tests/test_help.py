@@ -47,8 +47,10 @@ def test_usage_every_default_and_examples(prog: str) -> None:
     assert text.startswith(f"usage: {prog}"), text[:80]
     formatter = HelpFormatter(prog)
     for action in parser._actions:
-        if not action.option_strings or isinstance(
-            action, argparse._HelpAction | argparse._VersionAction
+        if (
+            not action.option_strings
+            or action.required  # (a required option has no default)
+            or isinstance(action, argparse._HelpAction | argparse._VersionAction)
         ):
             continue
         helped = formatter._get_help_string(action)

@@ -102,6 +102,15 @@ OUTPUTS: dict[str, object] = {
     "nc -N 127.0.0.1 7010": NEXT,  # the command file's markers
     "~/omsd-env/bin/omsd --version": b"omsd 0.1.0\n",
     "omsd ctl boards": re.compile(rb"^xy +PC48-4E +driver +tcp 127\.0\.0\.1:7001", re.M),
+    "omsd record --to tcp:127.0.0.1:7048": re.compile(
+        rb"^card PC48-4E driver tcp 127\.0\.0\.1:7100\nPC48 ver 3\.00-4\n!\^A\n"
+        rb"no differences: 1 answer and 1 marker over .*\n.*\n.*\n1 difference: .*\n"
+        rb"exit status 1\n",
+        re.M,
+    ),
+    "omsd replay traffic.jsonl": re.compile(
+        rb"^!\^A\n4000\n#\nno differences: 2 answers and 1 marker over ", re.M
+    ),
 }
 
 

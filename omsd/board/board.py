@@ -32,6 +32,7 @@ from omsd.engine.machine import Machine
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
+from omsd.protocol.lexer import SEPARATORS, Command
 
 CONTROL_D = 0x04
 CONTROL_Y = 0x19
@@ -45,6 +46,8 @@ class Board(Machine):
         model: Model,
         now: float = 0.0,
         world: Mapping[str, AxisWorld] | Sequence[AxisWorld] | None = None,
+        *,
+        fast_paths: bool = True,
     ) -> None:
         dialect = lookup(model.dialect)
         super().__init__(
@@ -55,6 +58,7 @@ class Board(Machine):
             options=dialect.options,
             ops=dialect.ops,
             sensor_hooks=dialect.sensor_hooks,
+            fast_paths=fast_paths,
         )
         self.dialect = dialect
         self.interpreter: Interpreter = dialect.interpreter(self, dialect)
@@ -73,6 +77,7 @@ class Board(Machine):
         """Power-up and a restore: the saved defaults (``flash_defaults``) over the factory
         values, and the stored programs, as the dialect keeps them (the PCIx; the older boards
         keep nothing in flash). Returns the saved values skipped because they do not fit."""
+        self.settled = False
         return self.interpreter.load_flash()
 
     # -- the data port ------------------------------------------------------------------------
@@ -87,6 +92,9 @@ class Board(Machine):
         holds one session's characters at a time: another session's bytes are not taken (0)
         until the characters already there have been read, so that what the board answers can
         be told apart (Control-D, which empties the buffer, is taken at once)."""
+        if self.fast_paths and source == self.input_source and self._reports_at_rest(data, now):
+            return len(data)
+        self.settled = False
         self.advance(now)
         interp = self.interpreter
         buffer = interp.buffer
@@ -144,6 +152,52 @@ class Board(Machine):
         self.settle(now)
         self.advance(now)
         return taken
+
+    def _reports_at_rest(self, data: bytes, now: float) -> bool:
+        """Fast path (issue 16): ``data`` is nothing but operand-less reports (``RP``, ``QA``,
+        ``?KP``; separators between them), the machine is at rest (:meth:`at_rest`: nothing
+        due, nothing to settle, the interpreter holding nothing) and not initialising. The
+        reports are run here, one after the other, and True returned; otherwise (False)
+        nothing was done and ``receive`` takes the regular way.
+
+        Equivalent to the regular way, which would: let time run to ``now`` (nothing is due:
+        only the clock moves), put the bytes in the input buffer and ``pump`` them (each word
+        is a command the lexer gives whole, run as the pending queue would run it:
+        :meth:`Interpreter.run_bare`; a report queues nothing, so no axis is stepped after it,
+        and it leaves the interpreter holding nothing), ``settle`` each time the buffer is
+        full and more is to come, and at the end ``settle`` and ``advance`` to ``now``. Those
+        settles and that advance are made here too, at the same points, unless the machine is
+        still at rest there (then they would change nothing)."""
+        if not (self.at_rest(now) and now >= self.now and self.init_until is None):
+            return False
+        interp = self.interpreter
+        words = interp.report_words
+        command = words.get(data)
+        if command is not None:  # the usual case: one word
+            self.now = now
+            self.talker = self.input_source
+            if not interp.run_bare(command, now):
+                raise AssertionError(f"{command.mnemonic}, a report, waited for queue space")
+            if self.settled and not self.deadline_stale:
+                return True  # still at rest: its deadline is the one at_rest looked at
+        else:
+            found = _scan(data, words, interp.words.longest)
+            if not found:
+                return False
+            self.now = now
+            self.talker = self.input_source
+            full = interp.capacity  # where the regular way finds the buffer full, and settles
+            for end, command in found:
+                while full < end:
+                    if not self.at_rest(now):
+                        self.settle(now)
+                    full += interp.capacity
+                if not interp.run_bare(command, now):
+                    raise AssertionError(f"{command.mnemonic}, a report, waited for queue space")
+        if not self.at_rest(now):
+            self.settle(now)
+            self.advance(now)
+        return True
 
     def input_room(self, source: int | None = None) -> int:
         """Characters the input buffer can take now (what a host sees as TBE_S); for
@@ -207,3 +261,24 @@ class Board(Machine):
                 for a in self.axes
             },
         }
+
+
+def _scan(data: bytes, words: Mapping[bytes, Command], longest: int) -> list[tuple[int, Command]]:
+    """The commands of ``data`` if it is nothing but ``words`` and separators, each with where
+    it ends; an empty list otherwise."""
+    found: list[tuple[int, Command]] = []
+    i = 0
+    n = len(data)
+    while i < n:
+        if data[i] in SEPARATORS:
+            i += 1
+            continue
+        for size in (2, 3) if longest > 2 else (2,):
+            command = words.get(data[i : i + size])
+            if command is not None:
+                i += size
+                found.append((i, command))
+                break
+        else:
+            return []
+    return found

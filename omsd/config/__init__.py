@@ -6,9 +6,11 @@ meaning and what an error says (:mod:`omsd.config.wording`, :mod:`omsd.config.va
 Validation (:mod:`omsd.config.reading`), the single-board command line, ``omsd config schema``
 (the JSON Schema, ``config/omsd.schema.json``), ``omsd config show`` and the README's reference
 table (:mod:`omsd.config.render`) are derived from it. This module is what the rest of omsd
-uses: the frozen dataclasses below, the defaults they share with the schema, and
-:func:`load_config` and :func:`from_options`, which import the schema only when called
-(pydantic takes ~0.1 s to import; ``omsd models`` and ``omsd ctl`` never pay for it).
+uses: the frozen dataclasses below, the defaults they share with the schema (defined in
+:mod:`omsd.defaults`, re-exported here), and :func:`load_config` and :func:`from_options`, which
+import the schema only when called (pydantic takes ~0.1 s to import; ``omsd models`` and ``omsd
+ctl`` never pay for it, and a valid single-board command line does not either: a fast path,
+:mod:`omsd.config.fastpath`, reads it, and the schema reads everything else).
 
 A file describes one or more boards, each with its own endpoints, link settings and simulated
 world (``config/omsd.toml`` shows and explains every key, README "Configuration reference" lists
@@ -65,42 +67,41 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 from omsd.config_errors import ConfigError
-from omsd.models import get_model, variant
+
+# The defaults and default places are defined in omsd.defaults (the schema gives them to its keys,
+# the objects below to their fields, the command line's help quotes them) and re-exported here.
+from omsd.defaults import (
+    BUFFER_SIZE_MAX,
+    BUFFER_SIZE_MIN,
+    CONTROL_SOCKET_NAME,
+    DEFAULT_BOARD_NAME,
+    DEFAULT_BUFFER_SIZE,
+    DEFAULT_EOS,
+    DEFAULT_HOST,
+    DEFAULT_KEEPALIVE,
+    DEFAULT_LINGER,
+    DEFAULT_LINK,
+    DEFAULT_MODEL,
+    DEFAULT_MQTT_PREFIX,
+    DEFAULT_PTY_MODE,
+    DEFAULT_SECOND_CLIENT,
+    DEFAULT_STATE_RATE,
+    DEFAULT_TCP_PORT,
+    DEFAULT_VIEW,
+    LINKS,
+    MAX_LINGER,
+    MAX_STATE_RATE,
+    MQTT_PORT,
+    MQTTS_PORT,
+    SECOND_CLIENT_POLICIES,
+    VIEWS,
+    default_pty_link,
+    runtime_directory,
+)
 
 if TYPE_CHECKING:
     from omsd.board import AxisWorld
     from omsd.models.spec import Model
-
-# -- the defaults: the schema (omsd.config.schema) gives them to its keys, the objects below
-# to their fields, the command line's help quotes them ---------------------------------------
-
-DEFAULT_TCP_PORT = 7048
-DEFAULT_HOST = "127.0.0.1"
-DEFAULT_MODEL = "PC48-4E"
-DEFAULT_BOARD_NAME = "board1"
-LINKS = ("driver", "raw")
-DEFAULT_LINK = "driver"
-DEFAULT_EOS = 0x0A  # §7.3.2: "The default value is an LF."
-DEFAULT_BUFFER_SIZE = 0x0100  # §7.3.2: "The default value is 0100 hex (256 decimal)."
-BUFFER_SIZE_MIN = 0x0010  # §7.3.2: "from 0010 to 7fff (16 to 32767 decimal)"
-BUFFER_SIZE_MAX = 0x7FFF
-SECOND_CLIENT_POLICIES = ("takeover", "refuse")
-DEFAULT_SECOND_CLIENT = "takeover"
-#: How long a TCP client that has shut down its sending side (``nc -N``, ``shutdown(SHUT_WR)``)
-#: is kept open for the answers, done markers and limits its commands are yet to produce.
-DEFAULT_LINGER = 60.0
-MAX_LINGER = 3600.0
-DEFAULT_PTY_MODE = 0o660
-VIEWS = ("auto", "rich", "plain", "off")
-DEFAULT_VIEW = "auto"
-CONTROL_SOCKET_NAME = "control.sock"
-MQTT_PORT = 1883  # IANA "mqtt"
-MQTTS_PORT = 8883  # IANA "secure-mqtt"
-DEFAULT_MQTT_PREFIX = "omsd"
-DEFAULT_KEEPALIVE = 60
-DEFAULT_STATE_RATE = 10.0
-MAX_STATE_RATE = 1000.0  # state publications per second per board, at most
-
 
 # -- the configuration --------------------------------------------------------------------------
 
@@ -161,6 +162,8 @@ class BoardConfig:
 
     def personality(self) -> Model:
         """The model as fitted and labelled on this board."""
+        from omsd.models import get_model, variant  # not at the top: omsd --help needs no model
+
         return variant(
             get_model(self.model), self.encoders, self.serial, self.firmware, self.max_queries
         )
@@ -227,29 +230,6 @@ class MqttConfig:
     traffic: bool = True
 
 
-# -- places -------------------------------------------------------------------------------------
-
-
-def runtime_directory() -> Path:
-    """The daemon's runtime directory, where the default pty links and the control socket go:
-    ``$RUNTIME_DIRECTORY`` under a systemd unit with ``RuntimeDirectory=``, else
-    ``$XDG_RUNTIME_DIR/omsd``, else ``/tmp/omsd-<uid>``. The daemon creates it (mode 0700) and
-    refuses one that another user could change (:func:`omsd.files.check_runtime_directory`)."""
-    runtime = os.environ.get("RUNTIME_DIRECTORY", "").split(":")[0]
-    if os.path.isabs(runtime):
-        return Path(runtime)
-    xdg = os.environ.get("XDG_RUNTIME_DIR", "")
-    if os.path.isabs(xdg):
-        return Path(xdg) / "omsd"
-    return Path(f"/tmp/omsd-{os.getuid()}")
-
-
-def default_pty_link(name: str) -> Path:
-    """Where a board's pty link goes when none is configured: ``<name>`` in the
-    :func:`runtime_directory`. The daemon creates the directory."""
-    return runtime_directory() / name
-
-
 # -- reading a configuration (the schema is imported here, when it is needed) -------------------
 
 
@@ -274,16 +254,47 @@ def from_options(
     one board of a file would be (paths relative to the working directory). Without --tcp and
     --pty, the default endpoints; with either, only what is given. ``--terminal`` puts the ptys
     in terminal mode (TCP stays exact: terminal TCP endpoints are for a configuration file)."""
-    from omsd.config import reading
-
-    return reading.single_board(board, tcp, pty, link, eos, log, terminal, "command line")
+    return _single_board(board, tcp, pty, link, eos, log, terminal, "command line")
 
 
 def default_config() -> DaemonConfig:
     """``omsd`` with no arguments: one PC48-4E on TCP 127.0.0.1:7048 and on a pty."""
+    return _single_board(None, [], [], None, None, None, False, "built-in default")
+
+
+def _single_board(
+    board: str | None,
+    tcp: list[str],
+    pty: list[str],
+    link: str | None,
+    eos: str | None,
+    log: str | None,
+    terminal: bool,
+    source: str,
+) -> DaemonConfig:
+    # the fast path (omsd.config.fastpath): options that are plainly valid without importing
+    # pydantic; anything else, and every error, from the schema
+    from omsd.config import fastpath
+
+    config = fastpath.single_board(board, tcp, pty, link, eos, log, terminal, source)
+    if config is not None:
+        return config
     from omsd.config import reading
 
-    return reading.single_board(None, [], [], None, None, None, False, "built-in default")
+    return reading.single_board(board, tcp, pty, link, eos, log, terminal, source)
+
+
+def _option_path(option: str, text: str) -> Path:
+    """``--state``/``--control``'s path: the fast path's (omsd.config.fastpath), else the
+    schema's, which words the error."""
+    from omsd.config import fastpath
+
+    path = fastpath.option_path(text)
+    if path is not None:
+        return path
+    from omsd.config import reading
+
+    return reading.option_path(option, text)
 
 
 def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConfig:
@@ -292,9 +303,7 @@ def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConf
         return config
     if control == "off":
         return replace(config, control=replace(config.control, socket=None, explicit=True))
-    from omsd.config import reading
-
-    path = reading.option_path("--control", control)
+    path = _option_path("--control", control)
     return replace(config, control=replace(config.control, socket=path, explicit=True))
 
 
@@ -304,17 +313,39 @@ def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
     it is."""
     if state is None:
         return config
-    from omsd.config import reading
-
-    path = reading.option_path("--state", state)
+    path = _option_path("--state", state)
     if path == config.log.file:
+        from omsd.config import reading
+
         raise reading.not_the_log("--state", path)
     return replace(config, state=path)
 
 
 __all__ = [
+    "BUFFER_SIZE_MAX",
+    "BUFFER_SIZE_MIN",
+    "CONTROL_SOCKET_NAME",
+    "DEFAULT_BOARD_NAME",
+    "DEFAULT_BUFFER_SIZE",
+    "DEFAULT_EOS",
+    "DEFAULT_HOST",
+    "DEFAULT_KEEPALIVE",
+    "DEFAULT_LINGER",
+    "DEFAULT_LINK",
     "DEFAULT_MODEL",
+    "DEFAULT_MQTT_PREFIX",
+    "DEFAULT_PTY_MODE",
+    "DEFAULT_SECOND_CLIENT",
+    "DEFAULT_STATE_RATE",
     "DEFAULT_TCP_PORT",
+    "DEFAULT_VIEW",
+    "LINKS",
+    "MAX_LINGER",
+    "MAX_STATE_RATE",
+    "MQTTS_PORT",
+    "MQTT_PORT",
+    "SECOND_CLIENT_POLICIES",
+    "VIEWS",
     "BoardConfig",
     "ConfigError",
     "ControlConfig",

@@ -741,7 +741,9 @@ class Document(Table):
         if self.state.file is not None and self.state.file == self.log.file:
             raise not_the_log_problem(self.state.file, ("state", "file"))
         names: dict[str, KeyPath] = {}
-        tcps: list[tuple[TcpEndpoint, KeyPath]] = []
+        # by port: only endpoints on the same port other than 0 can conflict (tcp_conflict),
+        # so 1,000 boards on port 0 take no check, not half a million
+        tcps: dict[int, list[tuple[TcpEndpoint, KeyPath]]] = {}
         ptys: dict[Path, KeyPath] = {}
         for i, (name, board) in enumerate(self.named_boards()):
             at: KeyPath = ("board", i)
@@ -753,10 +755,13 @@ class Document(Table):
                 )
             names[name] = (*at, "name")
             for endpoint, where in board.tcp_endpoints():
-                for other, other_at in tcps:
+                if endpoint.port == 0:
+                    continue
+                same_port = tcps.setdefault(endpoint.port, [])
+                for other, other_at in same_port:
                     if tcp_conflict(endpoint, other):
                         raise _duplicate((*at, *where), other_at, "an address", str(endpoint))
-                tcps.append((endpoint, (*at, *where)))
+                same_port.append((endpoint, (*at, *where)))
             for pty, where in board.pty_endpoints(name):
                 if pty.link in ptys:
                     raise _duplicate((*at, *where), ptys[pty.link], "a link", str(pty.link))

@@ -6,13 +6,24 @@ import grp
 import ipaddress
 import os
 import re
-from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
 from pydantic import Field, ValidationInfo
 
-from omsd.config import DEFAULT_HOST, TcpEndpoint
+from omsd.config import TcpEndpoint
+from omsd.config.syntax import (
+    HOSTNAME,
+    PATH_PATTERN,
+    TCP_PATTERN,
+    TCP_SYNTAX,
+    AddressProblem,
+    hex_pattern,
+    hex_value,
+    resolve,
+    tcp_address,
+    tcp_conflict,
+)
 from omsd.config.wording import Says, choices_json, problem
 from omsd.config_errors import show
 from omsd.models import MODELS, UnknownModel, get_model
@@ -26,25 +37,7 @@ def _context(info: ValidationInfo) -> Path:
 
 
 def _resolve(text: str, info: ValidationInfo) -> Path:
-    return Path(os.path.normpath(_context(info) / Path(text).expanduser()))
-
-
-def hex_value(lo: int, hi: int) -> Callable[[int | str], int]:
-    """A driver option: a string is hexadecimal (``"0D"``, ``"0x0d"``), an integer is itself."""
-
-    def value(raw: int | str) -> int:
-        if isinstance(raw, int):
-            return raw
-        number = int(raw.strip().removeprefix("0x").removeprefix("0X"), 16)
-        if not lo <= number <= hi:
-            raise ValueError(f"{number} is out of range")
-        return number
-
-    return value
-
-
-def hex_pattern(digits: int) -> str:
-    return rf"^\s*(0[xX])?[0-9A-Fa-f]{{1,{digits}}}\s*$"
+    return resolve(text, _context(info))
 
 
 def octal(raw: int | str) -> int:
@@ -78,63 +71,16 @@ def _group(name: str) -> str:
     return name
 
 
-# TCP addresses -----------------------------------------------------------------------------------
-
-TCP_SYNTAX = "[HOST:]PORT with PORT 0..65535"
-_TCP = re.compile(r"(?:(?:\[(?P<v6>[^\]]*)\]|(?P<host>[^:\[\]]*)):)?(?P<port>[0-9]{1,5})")
-_HOSTNAME = re.compile(r"[A-Za-z0-9_]([A-Za-z0-9_-]*[A-Za-z0-9_])?(\.[A-Za-z0-9_-]+)*")
+# TCP addresses (omsd.config.syntax) ------------------------------------------------------------
 
 
 def _tcp_address(raw: int | str) -> TcpEndpoint:
-    """``PORT``, ``HOST:PORT`` or ``[IPv6]:PORT``; an integer is a port on 127.0.0.1."""
-    if isinstance(raw, int):
-        return TcpEndpoint(DEFAULT_HOST, raw)
-    m = _TCP.fullmatch(raw)
-    if m is None or int(m.group("port")) > 65535:
-        raise ValueError(raw)
-    port = int(m.group("port"))
-    v6, host = m.group("v6"), m.group("host")
-    if v6 is not None:
-        try:
-            ipaddress.IPv6Address(v6)
-        except ValueError:
-            raise problem(expected="[HOST:]PORT with an IPv6 address inside [ ]") from None
-        return TcpEndpoint(v6, port)
-    if host is None:
-        return TcpEndpoint(DEFAULT_HOST, port)
-    if host == "":
-        raise problem(
-            expected="[HOST:]PORT with a HOST before the colon (0.0.0.0 for every interface)"
-        )
-    if re.fullmatch(r"[0-9.]+", host):
-        try:
-            ipaddress.IPv4Address(host)
-        except ValueError:
-            raise problem(expected="[HOST:]PORT with a valid IPv4 address") from None
-    elif not _HOSTNAME.fullmatch(host):
-        raise problem(expected="[HOST:]PORT with HOST an address or a host name")
-    return TcpEndpoint(host, port)
-
-
-def _family(host: str) -> int | None:
+    """``PORT``, ``HOST:PORT`` or ``[IPv6]:PORT`` (:func:`omsd.config.syntax.tcp_address`), the
+    address that cannot be used in the schema's words."""
     try:
-        return ipaddress.ip_address(host.split("%")[0]).version
-    except ValueError:
-        return None  # a host name: only the same name is known to collide
-
-
-def tcp_conflict(a: TcpEndpoint, b: TcpEndpoint) -> bool:
-    if a.port != b.port or a.port == 0:
-        return False
-    if a.host == b.host:
-        return True
-    family = _family(a.host)
-    wildcards = ("0.0.0.0", "::")
-    return (
-        family is not None
-        and family == _family(b.host)
-        and (a.host in wildcards or b.host in wildcards)
-    )
+        return tcp_address(raw)
+    except AddressProblem as exc:
+        raise problem(expected=exc.expected) from None
 
 
 def _is_address(host: str) -> bool:
@@ -147,7 +93,7 @@ def _is_address(host: str) -> bool:
 
 def broker_host(host: str) -> str:
     if _is_address(host.strip("[]")) or (
-        _HOSTNAME.fullmatch(host) and not re.fullmatch(r"[0-9.]+", host)
+        HOSTNAME.fullmatch(host) and not re.fullmatch(r"[0-9.]+", host)
     ):
         return host.strip("[]")
     raise ValueError(host)
@@ -169,9 +115,7 @@ def _ca_file(path: Path) -> Path:
 
 # the types of the keys --------------------------------------------------------------------------
 
-PATH_PATTERN = r"^[^\x00]*[^\x00\s][^\x00]*$"  # not empty or blank, no NUL
 NAME_PATTERN = r"^(?:[A-Za-z0-9_.-]*[A-Za-z0-9_-][A-Za-z0-9_.-]*|\.{3,})$"  # not "." or ".."
-TCP_PATTERN = r"^(?:(?:\[[^\]]*\]|[^:\[\]]*):)?[0-9]{1,5}$"
 SERIAL_PATTERN = r"[A-Za-z0-9-]{1,16}"
 FIRMWARE_PATTERN = r"\d{1,2}\.\d{2}"
 TOPIC_PATTERN = r"^[^/+#\x00$][^/+#\x00]*(?:/[^/+#\x00]+)*$"  # levels; no + # or a leading $

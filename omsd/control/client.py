@@ -21,8 +21,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from omsd.config import default_pty_link
 from omsd.control.protocol import MAX_LINE, ControlError, decode, encode
+from omsd.defaults import default_pty_link
 
 _UNSET: Any = object()
 

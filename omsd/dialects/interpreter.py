@@ -23,36 +23,20 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from omsd.dialects.operands import CommandFailed, Operands
-from omsd.dialects.registry import Dialect, prefixes
+from omsd.dialects.registry import AnyHandler, Dialect, prefixes
+from omsd.dialects.words import SyntaxTable, syntax, words_of
 from omsd.engine.axis import Axis
 from omsd.engine.contour import ContourDefinition
 from omsd.engine.machine import Machine
 from omsd.engine.queue import Op
-from omsd.models.spec import Cell, CommandSpec, Kind
+from omsd.models.spec import Cell, Kind
 from omsd.protocol.errors import ErrorKind
-from omsd.protocol.lexer import Command, Garbage, Lexer, Syntax, Token
+from omsd.protocol.lexer import Command, Garbage, Lexer, Token
 from omsd.protocol.operands import OperandError
 
 __all__ = ["Blocked", "Capture", "CommandFailed", "Interpreter", "LoopMark"]
 
 MAX_LOOP_DEPTH = 4
-
-
-class _SyntaxTable(dict[str, Syntax]):
-    """Mnemonic -> syntax, UNKNOWN for anything else (looked up for every letter received)."""
-
-    def __missing__(self, key: str) -> Syntax:
-        return Syntax.UNKNOWN
-
-
-def _syntax(spec: CommandSpec) -> Syntax:
-    if spec.letter_operand:
-        return Syntax.AXIS
-    if spec.hex_operand:
-        return Syntax.HEX
-    if not spec.operand:
-        return Syntax.BARE
-    return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
 
 
 def _motor_fits(motor: str, axis: Axis) -> bool:
@@ -67,6 +51,10 @@ def _motor_fits(motor: str, axis: Axis) -> bool:
     if motor == "open_loop":
         return not axis.has_encoder
     raise ValueError(motor)
+
+
+#: What :meth:`Interpreter.ready` keeps for a command: its handler and queue-table cell.
+Ready = tuple[AnyHandler, Cell]
 
 
 class Blocked(Exception):
@@ -104,9 +92,13 @@ class Interpreter(Operands):
         self._reports = dialect.reports
         self._check_fields = dialect.check_fields
         self._feedback_per_axis = dialect.feedback_per_axis
-        self._syntax = _SyntaxTable({m: _syntax(spec) for m, spec in self.commands.items()})
+        self._syntax = SyntaxTable({m: syntax(spec) for m, spec in self.commands.items()})
         self.lexer = self._lexer()
-        self._bare = self.lexer.bare_pairs(list(self.commands))
+        self._fast = machine.fast_paths
+        self.words = words_of(self.lexer, self._syntax, dialect.long_mnemonics, self._reports)
+        self.report_words = self.words.reports
+        # per mode and axis: the operand-less commands that pass every check there (ready)
+        self._ready: dict[tuple[str, int], dict[str, Ready | None]] = {}
         self.pending: deque[tuple[Token, int]] = deque()  # with the nesting depth it came from
         self.reset()
 
@@ -247,19 +239,37 @@ class Interpreter(Operands):
                 if tokens:
                     self.pending.extend((token, 0) for token in tokens)
                 continue
-            # the common case, in a tight loop: characters until one completes a command; an
-            # operand-less two-letter command between commands (QA, RP ...) is taken whole
+            # the common case, in a tight loop: characters until one completes a command
             lexer = self.lexer
             feed = lexer.feed
-            bare = self._bare
-            while buffer:
-                if len(buffer) >= 2 and lexer.between_commands:
-                    command = bare.get((buffer[0], buffer[1]))
-                    if command is not None:
-                        buffer.popleft()
-                        buffer.popleft()
-                        self.pending.append((command, 0))
+            if self._fast:
+                # fast path: an operand-less command between commands (QA, RP, ?KP ...) is
+                # taken whole and run at once, where the lexer would have given that command
+                # to the pending queue and the loop would have run it next (Words, run_bare)
+                words = self.words.packed
+                three = self.words.longest > 2
+                while buffer:
+                    if len(buffer) >= 2 and lexer.between_commands:
+                        command = words.get(0x10000 | buffer[0] << 8 | buffer[1])  # pack2
+                        if command is None and three and len(buffer) >= 3:
+                            command = words.get(  # pack3
+                                0x1000000 | buffer[0] << 16 | buffer[1] << 8 | buffer[2]
+                            )
+                        if command is not None:
+                            for _ in command.mnemonic:
+                                buffer.popleft()
+                            if not self.run_bare(command, t):
+                                return progressed
+                            if command.mnemonic not in reports:
+                                for axis in machine.axes:
+                                    machine.executor.step(axis, t)
+                            break
+                    tokens = feed(buffer.popleft())
+                    if tokens:
+                        self.pending.extend((token, 0) for token in tokens)
                         break
+                continue
+            while buffer:
                 tokens = feed(buffer.popleft())
                 if tokens:
                     self.pending.extend((token, 0) for token in tokens)
@@ -287,6 +297,14 @@ class Interpreter(Operands):
         return True
 
     def _command(self, cmd: Command, t: float) -> None:
+        checked = self._check(cmd)
+        if checked is not None:
+            handler, cell = checked
+            handler(self, cmd, cell, t)
+
+    def _check(self, cmd: Command) -> Ready | None:
+        """Every check of a command before its handler runs: its handler and queue-table cell;
+        None for a command that is ignored; :class:`CommandFailed` for one that fails."""
         model = self.machine.model
         spec = self.commands[cmd.mnemonic]
         cell = spec.cell(self.column)
@@ -308,7 +326,7 @@ class Interpreter(Operands):
             raise CommandFailed(ErrorKind.ENCODER_MODEL)
         if spec.single_axes is not None and self.axis.letter not in spec.single_axes:
             if spec.other_axes_ignored:
-                return  # VS4 VS in AY-AT: "Ignored"
+                return None  # VS4 VS in AY-AT: "Ignored"
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
         if cmd.error is not None:
             raise CommandFailed(cmd.error)
@@ -317,7 +335,63 @@ class Interpreter(Operands):
         handler = self.handlers.get(cmd.mnemonic)
         if handler is None:  # a table row without behaviour must not take the board down
             raise CommandFailed(ErrorKind.UNKNOWN_COMMAND)
-        handler(self, cmd, cell, t)
+        return handler, cell
+
+    # -- the fast path of operand-less commands (issue 16) --------------------------------------
+
+    def holds_nothing(self) -> bool:
+        """Nothing is waiting to be read or run, and the next character is read afresh: no
+        input, no pending command, no WQ, no echo, no capture, the lexer between commands."""
+        return (
+            not self.buffer
+            and not self.pending
+            and self.wq is None
+            and self.capture is None
+            and not self.echo
+            and self.lexer.between_commands
+        )
+
+    def run_bare(self, command: Command, t: float) -> bool:
+        """Run an operand-less command read whole (:class:`~omsd.dialects.words.Words`), as
+        the loop of :meth:`pump` runs the next command of the pending queue (``_dispatch``),
+        with the checks of :meth:`_check` known in advance where it can (:meth:`ready`). False
+        if it must wait for queue space: it is then first in the pending queue, as it would
+        have been."""
+        self.depth = 0
+        entry = self.ready(command)
+        if entry is None:
+            if self._dispatch(command, t):
+                return True
+        else:
+            handler, cell = entry
+            try:
+                handler(self, command, cell, t)
+                return True
+            except Blocked:
+                pass
+            except (CommandFailed, OperandError) as exc:
+                self.machine.command_error(exc.kind, command.text, t)
+                return True
+        self.pending.appendleft((command, 0))
+        return False
+
+    def ready(self, command: Command) -> Ready | None:
+        """:meth:`_check` of an operand-less command (a :class:`~omsd.dialects.words.Words`
+        command), kept: for a command without operand the checks depend only on the mode and
+        the axis (motor types and encoders are fixed at the factory), so the answer is kept per
+        mode and axis, with no contour or table being defined (else None, as for a command that
+        fails a check or is ignored: then ``_dispatch`` checks it again, and says what fails)."""
+        if self.contour is not None or self.only is not None:
+            return None
+        try:
+            return self._ready[self.mode, self.axis_index][command.mnemonic]
+        except KeyError:
+            try:
+                entry = self._check(command)
+            except (CommandFailed, OperandError):
+                entry = None
+            self._ready.setdefault((self.mode, self.axis_index), {})[command.mnemonic] = entry
+            return entry
 
     # -- context --------------------------------------------------------------------------------
 

@@ -41,8 +41,20 @@ class Core:
         world: Mapping[str, AxisWorld] | Sequence[AxisWorld] | None,
         framing: Framing,
         options: Options,
+        fast_paths: bool = True,
     ) -> None:
         self.model = model
+        # issue 16: the caches and fast paths of the hot path (Machine.advance, Machine.settle,
+        # Board.receive) are on; False runs the straightforward code everywhere (the
+        # differential tests, tests/board/test_fast_paths.py, compare the two)
+        self.fast_paths = fast_paths
+        # the machine's next deadline, cached (Machine._next_internal): stale whenever an axis
+        # drops its own cached next event (AxisState.invalidate) or init_until changes
+        self.deadline_stale = True
+        self.deadline: float | None = None
+        # a settle now would do nothing: the queues and the front ran to a standstill and only
+        # time has passed since (Machine.settle sets it; see Machine.at_rest for who clears it)
+        self.settled = False
         self.options = options
         self.framing = framing
         # the flash (non-volatile store) of a card that has one: saved power-up defaults (None:
@@ -143,17 +155,17 @@ class Core:
     def reply_value(self, text: str, t: float) -> None:
         """A value, in the dialect's framing (PC48: "surrounded by line feeds and carriage
         returns", ``<LF><CR>text<LF><CR>``)."""
+        # (reply_value and reply_status are the end of every query: written out, not shared)
         before, after = self.framing.value
-        self._framed(text, before, after, t)
+        payload = text.encode("latin-1")  # a stored program may hold any byte
+        self._output.append(Reply(t, before + payload + after, payload))
+        self._sources.append(self.talker)
 
     def reply_status(self, text: str, t: float) -> None:
         """An axis status, in the dialect's framing (PC48: "one line feed and two carriage
         returns on each end")."""
         before, after = self.framing.status
-        self._framed(text, before, after, t)
-
-    def _framed(self, text: str, before: bytes, after: bytes, t: float) -> None:
-        payload = text.encode("latin-1")  # a stored program may hold any byte
+        payload = text.encode("latin-1")
         self._output.append(Reply(t, before + payload + after, payload))
         self._sources.append(self.talker)
 

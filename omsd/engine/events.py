@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from omsd.protocol.errors import ErrorKind
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Reply:
     """Bytes the board writes to its data port.
 
@@ -23,6 +23,10 @@ class Reply:
     ``<LF><CR><CR>`` framing), or ``None`` for echoed characters, which are not framed. A link
     discipline that replaces the board's framing (the DOS driver's end-of-string character)
     uses it; the raw link sends ``data`` as it is.
+
+    Treat it as a value: nobody changes a reply once it is made. It is not declared frozen
+    because one is built for every reply the board gives (a frozen dataclass's ``__init__``
+    goes through ``object.__setattr__`` for each field, three times the cost; issue 16).
     """
 
     time: float

@@ -34,6 +34,7 @@ OpFunction = Callable[["Executor", Axis, Op, float], Result]
 SensorHook = Callable[["Executor", Axis, float], None]
 
 MAX_STEPS = 10_000  # ops one axis may run at one instant (a loop of zero-time ops)
+_IDLE = Motion.IDLE  # a global: an Enum member read through its class costs 70 ns in 3.11
 
 
 class Executor:
@@ -111,7 +112,7 @@ class Executor:
 
     def _satisfied(self, axis: Axis, w: Wait, t: float) -> bool:
         if w.kind == "motion":
-            return axis.motion is Motion.IDLE
+            return axis.motion is _IDLE
         if w.kind == "time":
             return w.until is not None and t >= w.until - 1e-12
         if w.kind == "group":

@@ -67,6 +67,11 @@ class Front(Protocol):
         """The input buffer can take a character."""
         ...
 
+    def holds_nothing(self) -> bool:
+        """Nothing waits to be read or run, and the next character is read afresh (no echo, no
+        recording): what :meth:`Machine.at_rest` asks of the front too."""
+        ...
+
     def forget_loops(self, index: int) -> None:
         """Axis ``index``'s queue was flushed: the loops open in it are gone."""
         ...
@@ -89,6 +94,9 @@ class Silent:
         return False
 
     def room(self) -> bool:
+        return True
+
+    def holds_nothing(self) -> bool:
         return True
 
     def forget_loops(self, index: int) -> None:

@@ -32,6 +32,11 @@ from omsd.models.spec import Model
 
 MAX_EVENTS_PER_ADVANCE = 1_000_000
 
+#: How far before its next deadline a machine counts as at rest (:meth:`Machine.at_rest`): a
+#: timed wait is over from ``until - 1e-12`` (``Executor._satisfied``), so a settle that close to
+#: a deadline may already run something.
+AT_REST_MARGIN = 1e-9
+
 #: The ops every machine runs (the shared language's queued commands).
 ENGINE_OPS: dict[str, OpFunction] = {**PARAMETER_OPS, **MOTION_OPS, **FLOW_OPS}
 
@@ -51,8 +56,9 @@ class Machine(Core):
         options: Options | None = None,
         ops: Mapping[str, OpFunction] | None = None,
         sensor_hooks: Sequence[SensorHook] = (),
+        fast_paths: bool = True,
     ) -> None:
-        super().__init__(model, now, world, framing, options or Options())
+        super().__init__(model, now, world, framing, options or Options(), fast_paths)
         self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
         self.power_up(now)
 
@@ -70,6 +76,8 @@ class Machine(Core):
         self.registers.done = 0
         self.registers.status = 0
         self.init_until = None
+        self.deadline_stale = True
+        self.settled = False
         self.front.power_up()
 
     def reset(self, t: float) -> None:
@@ -80,6 +88,7 @@ class Machine(Core):
             axis.reset(t)
         self.power_up(t)
         self.init_until = t + self.model.init_time
+        self.deadline_stale = True
 
     # -- time -----------------------------------------------------------------------------------
 
@@ -104,16 +113,45 @@ class Machine(Core):
         return t
 
     def _next_internal(self) -> float | None:
-        best = self.init_until
-        for axis in self.axes:
-            t = axis.next_event_time()
-            if t is not None and (best is None or t < best):
-                best = t
-        return best
+        """The earliest of the axes' next events and the end of INIT. Cached: found again only
+        when an axis has dropped its own cached next event (``deadline_stale``), so that a
+        poll costs the same whatever the number of axes in motion."""
+        if self.deadline_stale or not self.fast_paths:
+            best = self.init_until
+            for axis in self.axes:
+                t = axis.next_event_time()
+                if t is not None and (best is None or t < best):
+                    best = t
+            self.deadline = best
+            self.deadline_stale = False
+        return self.deadline
+
+    def at_rest(self, now: float) -> bool:
+        """Fast path (issue 16): nothing would happen if the machine were run at ``now``: the
+        last :meth:`settle` ran to a standstill with a front that holds nothing
+        (``Front.holds_nothing``), nothing has changed since but the time, and nothing is due by
+        ``now`` (with :data:`AT_REST_MARGIN`). Then a :meth:`settle` and an :meth:`advance` to
+        ``now`` would change nothing but ``self.now``, and a caller may skip them
+        (``Board.receive`` after a report).
+
+        Why that holds: with no deadline passed, no axis queue can move on (a wait for time is
+        a deadline; a wait for motion, a group, an input or "in position" ends only by what an
+        event, a command or a change of the world does), and the front has nothing to read.
+        ``settled`` is set by a settle that found nothing to do (and a front holding nothing:
+        no input, no command held back, no echo), and cleared by whatever may change the
+        machine without settling afterwards: a power-up or reset, a rewiring of the world
+        (:meth:`wire_input_to_aux`), input taken the regular way (``Board.receive``), a load of
+        the flash. Code that changes the machine's attributes directly must call :meth:`settle`
+        afterwards (the public methods do)."""
+        if not self.settled or self.deadline_stale:
+            return False
+        deadline = self.deadline
+        return deadline is None or now < deadline - AT_REST_MARGIN
 
     def _handle_due(self, t: float) -> None:
         if self.init_until is not None and self.init_until <= t:
             self.init_until = None
+            self.deadline_stale = True
         ex = self.executor
         for axis in self.axes:
             self.talker = axis.source  # what happens to an axis is the business of its mover
@@ -143,14 +181,23 @@ class Machine(Core):
 
     def settle(self, t: float) -> None:
         """Run queues and the front until nothing more happens at ``t``."""
+        step = self.executor.step
+        front = self.front
+        skip_idle = self.fast_paths
+        self.settled = False
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:
-                if self.executor.step(axis, t):
+                # fast path: an axis with no wait and nothing left in its queue is not stepped
+                # (Executor.step would return False at once, changing nothing)
+                if skip_idle and axis.wait is None and axis.queue.pc >= len(axis.queue.program):
+                    continue
+                if step(axis, t):
                     progressed = True
-            if self.front.pump(t):
+            if front.pump(t):
                 progressed = True
             if not progressed:
+                self.settled = front.holds_nothing()
                 return
 
     # -- registers ------------------------------------------------------------------------------
@@ -218,6 +265,7 @@ class Machine(Core):
 
     def wire_input_to_aux(self, bit: int, axis: str | None) -> None:
         """Wire an axis's open-collector auxiliary output to a general-purpose input."""
+        self.settled = False  # a wait for the input may be over: the next settle sees
         if axis is None:
             self.world.aux_wiring.pop(bit, None)
         else:

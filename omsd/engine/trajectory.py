@@ -20,6 +20,10 @@ from omsd.engine.pieces import Cosine, Decay, Piece, Poly, Shifted, Sinusoid, Wi
 
 _BISECT_ITERATIONS = 80
 
+#: How far beyond a trajectory's extent a level must be for :meth:`Trajectory.first_time` to
+#: answer "never" without looking (far more than the rounding of any position it computes).
+_REACH_MARGIN = 1e-3
+
 
 class Trajectory:
     """Position of one axis as a function of time: ``x0`` at ``t0``, then the pieces in turn.
@@ -29,7 +33,17 @@ class Trajectory:
     the pieces never shows in the position counter.
     """
 
-    __slots__ = ("_offsets", "_starts", "duration", "end_time", "final", "pieces", "t0", "x0")
+    __slots__ = (
+        "_extent",
+        "_offsets",
+        "_starts",
+        "duration",
+        "end_time",
+        "final",
+        "pieces",
+        "t0",
+        "x0",
+    )
 
     def __init__(
         self, t0: float, x0: float, pieces: Sequence[Piece] = (), final: float | None = None
@@ -54,6 +68,7 @@ class Trajectory:
         if final is None:
             final = x if math.isfinite(t) else math.nan
         self.final = final
+        self._extent: tuple[float, float] | None = None
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
@@ -101,6 +116,12 @@ class Trajectory:
         def hit(x: float) -> bool:
             return x >= level if above else x <= level
 
+        # fast path: a level beyond everywhere the trajectory goes is never reached (a switch
+        # far from a short move, looked for each time the axis's next event is found)
+        lowest, highest = self.extent()
+        reach = _REACH_MARGIN + 1e-9 * abs(level)
+        if (level > highest + reach) if above else (level < lowest - reach):
+            return None
         t_from = max(t_from, self.t0)
         if hit(self.position(t_from)):
             return t_from
@@ -134,6 +155,35 @@ class Trajectory:
         if self.pieces and self.is_finite and hit(self.final):
             return self.end_time
         return None
+
+    def extent(self) -> tuple[float, float]:
+        """The lowest and the highest position of the whole trajectory, at rest before and
+        after included (``-inf``/``inf`` on the side a piece without end heads to). Found once:
+        at the ends of each piece and where its velocity changes sign (its turning points), the
+        only places a piece's position can be extreme."""
+        if self._extent is None:
+            lowest = highest = self.x0
+            for base, piece in zip(self._offsets, self.pieces, strict=True):
+                duration = piece.duration
+                if math.isinf(duration):  # a cruise without end (first_time's own rule)
+                    v = piece.v(0.0)
+                    if v > 0.0:
+                        highest = math.inf
+                    elif v < 0.0:
+                        lowest = -math.inf
+                    times: Sequence[float] = (0.0,)
+                else:
+                    times = (0.0, duration, *piece.turning_points())
+                for tau in times:
+                    x = base + piece.x(tau)
+                    if x < lowest:
+                        lowest = x
+                    elif x > highest:
+                        highest = x
+            if self.pieces and self.is_finite:
+                lowest, highest = min(lowest, self.final), max(highest, self.final)
+            self._extent = (lowest, highest)
+        return self._extent
 
 
 def segment(traj: Trajectory, a: float, b: float) -> list[Piece]:

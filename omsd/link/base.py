@@ -8,20 +8,43 @@ board's events for the traffic log. Links are sans-I/O.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol
 
 from omsd.board import Board, CommandErrorEvent, Event, Output, Reply
 
 
-@dataclass(frozen=True)
 class LinkOutput:
-    """What the host is to read, and the events. ``pieces`` splits ``data`` by the session whose
-    conversation produced each part (0: the board's own doing, for whoever holds the line)."""
+    """What the host is to read, and the events. ``pieces`` is what the host is to read, by the
+    session whose conversation produced each part (0: the board's own doing, for whoever holds
+    the line); ``data`` all of it, in order.
 
-    data: bytes
-    events: list[Event] = field(default_factory=list)
-    pieces: list[tuple[int, bytes]] = field(default_factory=list)
+    A plain class with slots, not a dataclass: one is made for every command a client sends,
+    and a frozen dataclass's ``__init__`` costs several times as much (issue 16). Treat it as a
+    value."""
+
+    __slots__ = ("events", "pieces")
+
+    def __init__(
+        self, pieces: list[tuple[int, bytes]] | None = None, events: list[Event] | None = None
+    ) -> None:
+        self.pieces: list[tuple[int, bytes]] = [] if pieces is None else pieces
+        self.events: list[Event] = [] if events is None else events
+
+    @property
+    def data(self) -> bytes:
+        pieces = self.pieces
+        return pieces[0][1] if len(pieces) == 1 else b"".join(p[1] for p in pieces)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, LinkOutput):
+            return NotImplemented
+        return (self.pieces, self.events) == (other.pieces, other.events)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"LinkOutput(pieces={self.pieces!r}, events={self.events!r})"
 
 
 @dataclass(frozen=True)

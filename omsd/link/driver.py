@@ -41,6 +41,7 @@ from omsd.board import (
     DoneEvent,
     Event,
     LimitEvent,
+    Output,
     Reply,
     SlipEvent,
 )
@@ -100,6 +101,20 @@ class DriverLink:
 
     def from_host(self, data: bytes, now: float, session: int = 0) -> int:
         """Put host bytes into the driver's buffer; returns how many fitted."""
+        if (
+            not self._pending
+            and self._waiting is None
+            and self._comment is None
+            and b"*" not in data
+            and b"!" not in data
+            and b"@" not in data
+        ):
+            return self._straight_through(data, now, session)
+        return self.through_buffer(data, now, session)
+
+    def through_buffer(self, data: bytes, now: float, session: int = 0) -> int:
+        """:meth:`from_host` the driver's way, by its buffer, whatever the bytes (what it does
+        but for its fast path)."""
         skipped = 0
         if (self._pending or self._waiting is not None) and CONTROL_D in data:
             skipped = data.index(CONTROL_D)
@@ -113,6 +128,20 @@ class DriverLink:
         self._append(session, taken)
         self._pass_on(now)
         return skipped + len(taken)
+
+    def _straight_through(self, data: bytes, now: float, session: int) -> int:
+        """The fast path of :meth:`from_host` (issue 16): with nothing held, no comment open and
+        no ``*``, ``!`` or ``@`` in the bytes, the driver has nothing to do but pass them on, so
+        they go to the board as they are, without a stay in the buffer; what the board does not
+        take waits there as it would have. The same steps as :meth:`_pass_on` takes for them."""
+        taken = data[: self.buffer_size]
+        sent = self.board.receive(taken, now, session) if taken else 0
+        if sent < len(taken):
+            self._append(session, taken[sent:])
+        touched = self._collect(now)
+        if sent and (self._pending or touched):
+            self._pass_on(now)  # (with nothing left and the board not asked again, a no-op)
+        return len(taken)
 
     @property
     def waiting(self) -> str | None:
@@ -276,18 +305,38 @@ class DriverLink:
         self._pass_on(now)
         pieces, self._pieces = self._pieces, []
         events, self._events = self._events, []
-        data = pieces[0][1] if len(pieces) == 1 else b"".join(p[1] for p in pieces)
-        return LinkOutput(data, events, pieces)
+        return LinkOutput(pieces, events)
 
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
 
-    def _collect(self, now: float) -> None:
+    def _collect(self, now: float) -> bool:
+        """The board's output to the pieces and events; True if the board was asked something
+        (an event's registers were read), so that it may have said more."""
         board = self.board
         out, sources = board.take_output_sourced()
+        if len(out) <= 1:
+            # the fast path: nothing, or one framed reply (a query's answer): its text and the
+            # end character
+            if not out:
+                return False
+            item = out[0]
+            if isinstance(item, Reply) and item.text is not None:
+                source = sources[0]
+                if source in self._echoing:
+                    self._end_echo(source)
+                merge(self._pieces, source, item.text + self.eos)
+                return False
+        return self.collect_all(out, sources, now)
+
+    def collect_all(self, out: list[Output], sources: list[int], now: float) -> bool:
+        """The board's output to the pieces and events, item by item (what :meth:`_collect`
+        does but for its fast path)."""
+        board = self.board
         message_first(out, sources)
         pieces = self._pieces
         eos = self.eos
+        events_before = len(self._events)
         for item, source in zip(out, sources, strict=True):
             if isinstance(item, Reply):
                 if item.text is not None:
@@ -324,6 +373,7 @@ class DriverLink:
                     board.receive(CONTROL_Y, now, session)
                 else:
                     self._unclaimed[(WAIT_DONE, source)] = item.time
+        return len(self._events) > events_before
 
     def _echo(self, source: int, data: bytes) -> None:
         """Echoed characters: the driver "strips off the LF and CR's"; where one ends echoed

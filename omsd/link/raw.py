@@ -11,7 +11,7 @@ error message (``XQ<LF><CR>Unrecognized command: XQ<LF><CR>#``), as the driver's
 
 from __future__ import annotations
 
-from omsd.board import Board, CommandErrorEvent, Event, Reply
+from omsd.board import Board, CommandErrorEvent, Event, Output, Reply
 from omsd.link.base import Held, LinkOutput, merge, message_first
 
 
@@ -28,6 +28,19 @@ class RawLink:
         board = self.board
         board.advance(now)
         out, sources = board.take_output_sourced()
+        if len(out) <= 1:
+            # the fast path: nothing, or one reply (a query's answer) as it is
+            if not out:
+                return LinkOutput()
+            item = out[0]
+            if isinstance(item, Reply):
+                return LinkOutput([(sources[0], item.data)])
+        return self.output(out, sources)
+
+    @staticmethod
+    def output(out: list[Output], sources: list[int]) -> LinkOutput:
+        """The board's output for the host, item by item (what :meth:`to_host` does but for its
+        fast path)."""
         message_first(out, sources)
         pieces: list[tuple[int, bytes]] = []
         events: list[Event] = []
@@ -38,8 +51,7 @@ class RawLink:
                 events.append(item)
                 if isinstance(item, CommandErrorEvent):
                     merge(pieces, source, b"#")
-        data = pieces[0][1] if len(pieces) == 1 else b"".join(p[1] for p in pieces)
-        return LinkOutput(data, events, pieces)
+        return LinkOutput(pieces, events)
 
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()

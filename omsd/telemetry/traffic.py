@@ -66,20 +66,26 @@ characters as ``\\u0004`` and so on); ``hex`` is the same bytes in hex, for grep
 without latin-1. :meth:`Traffic.from_record` reads a traffic object back.
 
 The file is opened for appending (``O_APPEND``; created ``0600`` if missing, or ``0640`` in the
-group given, :func:`omsd.files.open_log`; an existing file keeps its permissions) and every line
-is handed to the kernel with one ``write(2)`` of the whole line, with no buffering in this
-process: when the daemon crashes, even by SIGKILL, every record logged before is in the file,
-and at most the line being written is cut short. (A power failure is another matter: there is
-no fsync.) :meth:`TrafficLog.reopen` (the daemon's SIGHUP) opens the path again, for logrotate:
+group given, :func:`omsd.files.open_log`; an existing file keeps its permissions), and nothing
+is buffered in this process beyond one turn of the daemon's work. The daemon *holds* the log
+(:meth:`TrafficLog.hold`) while it handles what one client wrote, or one of a board's
+deadlines, and writes the lines of that turn when it has answered: the traffic in and out, the
+events and messages, in order, whole lines in one ``write(2)`` (the view's in one write to the
+stream), so that formatting them never delays a reply (issue 16). Not held, as at start-up and
+shutdown, each line is written at once. When the daemon crashes, even by SIGKILL, every record
+of the turns before is in the file; the records of the turn being handled are lost, and the
+last line in the file may be cut short. (A power failure is another matter: there is no
+fsync.) :meth:`TrafficLog.reopen` (the daemon's SIGHUP) opens the path again, for logrotate:
 after a rotation that renamed the file, the lines go to a new file at the path.
+
+Making the lines is :mod:`omsd.telemetry.lines`: the same bytes as ``datetime``,
+``json.dumps`` and ``rich``'s ``Console.print`` made, in a fraction of their time.
 
 The log is not thread-safe; the daemon calls it from its one event-loop thread.
 """
 
 from __future__ import annotations
 
-import datetime
-import json
 import os
 import pathlib
 import sys
@@ -94,6 +100,14 @@ from rich.style import Style
 from rich.text import Text
 
 from omsd.files import open_log
+from omsd.telemetry.lines import (
+    RichStyles,
+    clock_text,
+    json_line,
+    pieces,
+    traffic_json,
+    visible,
+)
 
 VIEWS = ("auto", "rich", "plain", "off")
 """The accepted values of ``TrafficLog(view=...)``."""
@@ -163,47 +177,6 @@ class TrafficLogError(OSError):
         return f"cannot open traffic log {self.filename}: {self.strerror}"
 
 
-_NAMED = {0x0A: "<LF>", 0x0D: "<CR>"}
-
-
-def _pieces(data: bytes) -> list[tuple[str, bool]]:
-    """Split ``data`` into runs of printable text (``False``) and shown control bytes (``True``)."""
-    out: list[tuple[str, bool]] = []
-    start = 0
-    for i, byte in enumerate(data):
-        if 0x20 <= byte < 0x7F:
-            continue
-        if start < i:
-            out.append((data[start:i].decode("ascii"), False))
-        if byte in _NAMED:
-            shown = _NAMED[byte]
-        elif byte < 0x20:
-            shown = "^" + chr(byte + 0x40)
-        else:
-            shown = f"<{byte:02X}>"
-        out.append((shown, True))
-        start = i + 1
-    if start < len(data):
-        out.append((data[start:].decode("ascii"), False))
-    return out
-
-
-def visible(data: bytes) -> str:
-    """Show bytes so a person can read them, whatever they are.
-
-    Printable ASCII (space to ``~``) as itself; LF and CR as ``<LF>`` and ``<CR>`` (the manual's
-    notation); the other control characters 0x00-0x1F in caret notation (``^D`` for Control-D,
-    ``^Y`` for Control-Y, ``^[`` for ESC); DEL and bytes 0x80-0xFF as ``<XX>`` in hex.
-    """
-    return "".join(text for text, _ in _pieces(data))
-
-
-def _clock_text(t: float) -> str:
-    """Local time of day to the millisecond (truncated, so it never shows ``60.000``)."""
-    moment = datetime.datetime.fromtimestamp(t)
-    return f"{moment:%H:%M:%S}.{moment.microsecond // 1000:03d}"
-
-
 def _on_journal(stream: TextIO, env: Mapping[str, str]) -> bool:
     """Whether ``stream`` is the journal stream systemd announced in ``$JOURNAL_STREAM``."""
     announced = env.get("JOURNAL_STREAM", "")
@@ -249,6 +222,11 @@ class TrafficLog:
 
     A stream that fails (a closed pipe) is given up silently and the file goes on; a file that
     fails (a full disk) is reported once as an error on the stream and then closed.
+
+    **Held** (:meth:`hold` ... :meth:`release`, the board service's way while it handles a
+    client's bytes or a deadline): what is logged meanwhile is kept, in order, and formatted
+    and written when the outermost hold is released, after the replies have gone out, with one
+    write to the file and one to the stream. Not held, each call is written at once.
     """
 
     def __init__(
@@ -275,15 +253,16 @@ class TrafficLog:
         """Whether plain lines carry sd-daemon(3) level prefixes."""
         self.path = file
         self.group = group
-        self._console: Console | None = None
+        self._styles: RichStyles | None = None
         if view == "rich":
-            self._console = Console(
+            console = Console(
                 file=self._stream,
                 soft_wrap=True,
                 markup=False,
                 emoji=False,
                 highlight=False,
             )
+            self._styles = RichStyles(console)
         self._widths = [0, 0]  # board and endpoint columns of the rich view
         self._fd: int | None = None
         if file is not None:
@@ -291,37 +270,36 @@ class TrafficLog:
                 self._fd = open_log(file, group)
             except OSError as exc:
                 raise TrafficLogError(exc.errno, exc.strerror or str(exc), str(file)) from exc
+        self._held = 0  # depth of hold() calls not yet released
+        self._queue: list[_Entry] = []  # what was logged while held, in order
+        self.wants_traffic = True
+        """Whether traffic is shown or written anywhere (a caller may skip making records)."""
+        self._wanted()
+
+    def _wanted(self) -> None:
+        self.wants_traffic = self._fd is not None or self.view != "off"
 
     # ----------------------------------------------------------------- public interface
 
     def record(self, item: Traffic) -> None:
         """Log one chunk of traffic."""
-        if self._fd is not None:
-            self._write_file(item.to_record())
-        if self.view == "plain":
-            self._plain(
-                SD_INFO,
-                f"{_clock_text(item.time)} {item.board} {item.endpoint} "
-                f"{item.direction.arrow} {visible(item.data)}",
-            )
-        elif self.view == "rich":
-            text = self._rich_head(item.time, item.board, item.endpoint)
-            text.append(item.direction.arrow, _ARROW[item.direction])
-            text.append(" ")
-            for piece, control in _pieces(item.data):
-                text.append(piece, _CONTROL if control else _DATA[item.direction])
-            self._rich(text)
+        self.traffic(item.time, item.board, item.endpoint, item.direction, item.data)
+
+    def traffic(
+        self, time: float, board: str, endpoint: str, direction: Direction, data: bytes
+    ) -> None:
+        """Log one chunk of traffic, given as the fields of a :class:`Traffic`."""
+        if not self.wants_traffic:
+            return
+        self._queue.append((_TRAFFIC, time, board, endpoint, direction, data))
+        if not self._held:
+            self._flush()
 
     def event(self, time: float, board: str, what: str) -> None:
         """Log a board event (``done X``, ``limit X+``, ``slip Y``, ``command error``...)."""
-        if self._fd is not None:
-            self._write_file({"t": time, "kind": "event", "board": board, "what": what})
-        if self.view == "plain":
-            self._plain(SD_INFO, f"{_clock_text(time)} {board} [{what}]")
-        elif self.view == "rich":
-            text = self._rich_head(time, board, None)
-            text.append(f"[{what}]", _EVENT)
-            self._rich(text)
+        self._queue.append((_EVENT_ENTRY, time, board, what))
+        if not self._held:
+            self._flush()
 
     @property
     def stream(self) -> TextIO:
@@ -331,15 +309,25 @@ class TrafficLog:
     def info(self, message: str, *, view: bool = True) -> None:
         """Log one of the daemon's messages (startup, where each board can be reached...);
         ``view=False``: to the file only (the terminal shows it already)."""
-        self._message("info", SD_INFO, message, view)
+        self._message("info", message, view)
 
     def warning(self, message: str) -> None:
         """Log something that went wrong but that the daemon survives."""
-        self._message("warning", SD_WARNING, message)
+        self._message("warning", message)
 
     def error(self, message: str) -> None:
         """Log an error."""
-        self._message("error", SD_ERR, message)
+        self._message("error", message)
+
+    def hold(self) -> None:
+        """Keep what is logged from now on until the matching :meth:`release` (holds nest)."""
+        self._held += 1
+
+    def release(self) -> None:
+        """End a :meth:`hold`; the outermost one formats and writes what was kept."""
+        self._held -= 1
+        if not self._held and self._queue:
+            self._flush()
 
     def reopen(self) -> bool:
         """Open the file's path again and write there from now on (logrotate's "reopen your
@@ -349,21 +337,28 @@ class TrafficLog:
         one, if any, is still written)."""
         if self.path is None:
             return False
+        if self._queue:
+            self._flush()  # what was logged before the signal goes to the old file
         try:
             fd = open_log(self.path, self.group)
         except OSError as exc:
             self.error(f"traffic log {self.path}: cannot reopen: {exc.strerror or exc}")
             return False
         old, self._fd = self._fd, fd
+        self._wanted()
         if old is not None:
             os.close(old)
         return True
 
     def close(self) -> None:
-        """Flush the stream and close the file; later calls do nothing. The stream stays usable."""
+        """Write what is kept, flush the stream and close the file; later calls do nothing. The
+        stream stays usable."""
+        while self._queue:
+            self._flush()
         self._flush_stream()
         if self._fd is not None:
             fd, self._fd = self._fd, None
+            self._wanted()
             os.close(fd)
 
     def __enter__(self) -> TrafficLog:
@@ -372,65 +367,117 @@ class TrafficLog:
     def __exit__(self, *exc_info: object) -> None:
         self.close()
 
+    # ----------------------------------------------------------------- writing a batch
+
+    def _message(self, level: str, message: str, view: bool = True) -> None:
+        self._queue.append((_MESSAGE, self._clock(), level, message, view))
+        if not self._held:
+            self._flush()
+
+    def _flush(self) -> None:
+        """Format what is kept and write it: the JSON lines in one write to the file, the
+        view's lines in one write to the stream."""
+        entries, self._queue = self._queue, []
+        file = self._fd is not None
+        shown = self.view != "off"
+        lines: list[str] = []
+        view: list[str] = []
+        for entry in entries:
+            if file:
+                lines.append(self._json(entry))
+            if shown:
+                self._show(entry, view)
+        if lines:
+            self._write_file("".join(lines))
+        if view and self.view != "off":
+            self._write_stream("".join(view))
+
+    @staticmethod
+    def _json(entry: _Entry) -> str:
+        kind = entry[0]
+        if kind is _TRAFFIC:
+            _, t, board, endpoint, direction, data = entry
+            return traffic_json(t, board, endpoint, direction.value, data)
+        if kind is _EVENT_ENTRY:
+            _, t, board, what = entry
+            return json_line({"t": t, "kind": "event", "board": board, "what": what})
+        _, t, level, message, _ = entry
+        return json_line({"t": t, "kind": level, "message": message})
+
+    def _show(self, entry: _Entry, out: list[str]) -> None:
+        """The view's lines of one entry, appended to ``out``."""
+        kind = entry[0]
+        if self.view == "plain":
+            prefix = SD_INFO if self.journal else ""
+            if kind is _TRAFFIC:
+                _, t, board, endpoint, direction, data = entry
+                out.append(
+                    f"{prefix}{clock_text(t)} {board} {endpoint} {_ARROWS[direction]} "
+                    f"{visible(data)}\n"
+                )
+            elif kind is _EVENT_ENTRY:
+                _, t, board, what = entry
+                out.append(f"{prefix}{clock_text(t)} {board} [{what}]\n")
+            elif entry[4]:
+                _, t, level, message, _ = entry
+                prefix = _PREFIX[level] if self.journal else ""
+                label = "" if level == "info" else f"{level}: "
+                for line in message.splitlines() or [""]:
+                    out.append(f"{prefix}{clock_text(t)} {label}{line}\n")
+            return
+        styles = self._styles
+        assert styles is not None
+        if kind is _TRAFFIC:
+            _, t, board, endpoint, direction, data = entry
+            parts = [self._rich_head(styles, t, board, endpoint)]
+            parts.append(styles.wrap(_ARROWS[direction], _ARROW[direction]))
+            parts.append(" ")
+            for piece, control in pieces(data):
+                parts.append(styles.wrap(piece, _CONTROL if control else _DATA[direction]))
+            parts.append("\n")
+            out.append("".join(parts))
+        elif kind is _EVENT_ENTRY:
+            _, t, board, what = entry
+            head = self._rich_head(styles, t, board, None)
+            out.append(f"{head}{styles.wrap(f'[{what}]', _EVENT)}\n")
+        elif entry[4]:
+            _, t, level, message, _ = entry
+            label = "" if level == "info" else f"{level}: "
+            for line in message.splitlines() or [""]:
+                text = Text()
+                text.append(clock_text(t), _TIME)
+                text.append(" ")
+                text.append(f"{label}{line}", _LEVEL[level])
+                out.append(styles.line(text))
+
+    def _rich_head(self, styles: RichStyles, t: float, board: str, endpoint: str | None) -> str:
+        widths = self._widths
+        widths[0] = max(widths[0], len(board))
+        head = f"{styles.wrap(clock_text(t), _TIME)} {styles.wrap(board.ljust(widths[0]), _BOARD)} "
+        if endpoint is not None:
+            widths[1] = max(widths[1], len(endpoint))
+            head += f"{styles.wrap(endpoint.ljust(widths[1]), _ENDPOINT)} "
+        return head
+
     # ----------------------------------------------------------------- the file
 
-    def _write_file(self, record: dict[str, Any]) -> None:
+    def _write_file(self, text: str) -> None:
         assert self._fd is not None
-        line = (json.dumps(record) + "\n").encode("ascii")  # ensure_ascii: always ASCII
-        view = memoryview(line)
+        view = memoryview(text.encode("ascii"))  # ensure_ascii: always ASCII
         try:
             while view:
                 view = view[os.write(self._fd, view) :]
         except OSError as exc:
             fd, self._fd = self._fd, None
+            self._wanted()
             os.close(fd)
             self.error(f"traffic log {self.path}: {exc.strerror}; no longer written")
 
     # ----------------------------------------------------------------- the stream
 
-    def _message(self, level: str, prefix: str, message: str, view: bool = True) -> None:
-        t = self._clock()
-        if self._fd is not None:
-            self._write_file({"t": t, "kind": level, "message": message})
-        if not view:
-            return
-        label = "" if level == "info" else f"{level}: "
-        lines = message.splitlines() or [""]
-        if self.view == "plain":
-            for line in lines:
-                self._plain(prefix, f"{_clock_text(t)} {label}{line}")
-        elif self.view == "rich":
-            for line in lines:
-                text = Text()
-                text.append(_clock_text(t), _TIME)
-                text.append(" ")
-                text.append(f"{label}{line}", _LEVEL[level])
-                self._rich(text)
-
-    def _plain(self, prefix: str, line: str) -> None:
+    def _write_stream(self, text: str) -> None:
         try:
-            self._stream.write(f"{prefix}{line}\n" if self.journal else f"{line}\n")
-            self._stream.flush()
-        except (OSError, ValueError):
-            self._give_up_stream()
-
-    def _rich_head(self, t: float, board: str, endpoint: str | None) -> Text:
-        self._widths[0] = max(self._widths[0], len(board))
-        text = Text()
-        text.append(_clock_text(t), _TIME)
-        text.append(" ")
-        text.append(board.ljust(self._widths[0]), _BOARD)
-        text.append(" ")
-        if endpoint is not None:
-            self._widths[1] = max(self._widths[1], len(endpoint))
-            text.append(endpoint.ljust(self._widths[1]), _ENDPOINT)
-            text.append(" ")
-        return text
-
-    def _rich(self, text: Text) -> None:
-        assert self._console is not None
-        try:
-            self._console.print(text)
+            self._stream.write(text)
             self._stream.flush()
         except (OSError, ValueError):
             self._give_up_stream()
@@ -445,4 +492,15 @@ class TrafficLog:
 
     def _give_up_stream(self) -> None:
         self.view = "off"
-        self._console = None
+        self._styles = None
+        self._wanted()
+
+
+# What is kept while the log is held: (_TRAFFIC, time, board, endpoint, direction, data),
+# (_EVENT_ENTRY, time, board, what) or (_MESSAGE, time, level, message, shown on the view).
+_TRAFFIC = "traffic"
+_EVENT_ENTRY = "event"
+_MESSAGE = "message"
+_Entry = tuple[Any, ...]
+_PREFIX = {"info": SD_INFO, "warning": SD_WARNING, "error": SD_ERR}
+_ARROWS = {direction: direction.arrow for direction in Direction}

@@ -46,6 +46,13 @@ from omsd.transport.inotify import CLOSED, OPENED, OpenWatch, watch_opens
 from omsd.transport.terminal import Terminal, terminal_for
 
 MAX_BACKLOG = 64 * 1024
+#: What one read takes from the master at most.
+READ_SIZE = 4096
+
+# The one buffer every pty's master is read into (os.readv), as the TCP endpoints share theirs
+# (omsd.transport.tcp): a read of a few bytes makes no 4 KiB bytes object. The event loop calls
+# one reader at a time and the bytes are copied out at once.
+_READ_BUFFER = memoryview(bytearray(READ_SIZE))
 
 
 class PtyEndpoint:
@@ -236,12 +243,13 @@ class PtyEndpoint:
     # -- input ----------------------------------------------------------------------------------
 
     def _readable(self) -> None:
-        if self._watch is not None:
-            self._watch.drain()  # a close and an open come before the bytes written after them
+        watch = self._watch
+        if watch is not None and watch.queued():
+            watch.drain()  # a close and an open come before the bytes written after them
             if not self._reading:
                 return  # the session ended: what was unread went with it
         try:
-            data = os.read(self.master, 4096)
+            n = os.readv(self.master, [_READ_BUFFER])
         except BlockingIOError:
             return
         except OSError as exc:
@@ -250,9 +258,19 @@ class PtyEndpoint:
                     self._opened_or_closed(self._session_over(keep_input=True, upcoming=[]))
                 return
             raise
-        if data:
+        if not n:
+            return
+        data = bytes(_READ_BUFFER[:n])
+        if self._pending or self.terminal is not None:
             self._take(data)
             self._push()
+            return
+        # the fast path: nothing held back from before and no line editing, so the bytes go to
+        # the board as they came, and only what it does not take is kept (as _push would)
+        taken = self.service.feed(self, data)
+        if taken < n:
+            self._pending += data[taken:]
+            self._flow()
 
     def _take(self, data: bytes) -> None:
         """What the client wrote, for the board (through the terminal's line editing)."""
@@ -266,6 +284,10 @@ class PtyEndpoint:
         if self._pending:
             taken = self.service.feed(self, bytes(self._pending))
             del self._pending[:taken]
+        self._flow()
+
+    def _flow(self) -> None:
+        """Read the master while the board can take what is read; stop while it cannot."""
         loop = self._loop
         if loop is None or self.master < 0:
             return
@@ -289,6 +311,17 @@ class PtyEndpoint:
     def _write(self, data: bytes) -> None:
         if self.master < 0 or not self.connected or not data:
             return
+        if not self._backlog:
+            # the fast path: nothing waiting before it, so it goes to the terminal at once
+            try:
+                n = os.write(self.master, data)
+            except BlockingIOError:
+                n = 0
+            except OSError:
+                return  # as _flush does: what cannot be written is dropped
+            if n == len(data):
+                return
+            data = data[n:]
         self._backlog += data
         if len(self._backlog) > MAX_BACKLOG:
             del self._backlog[: len(self._backlog) - MAX_BACKLOG]

@@ -29,11 +29,21 @@ from omsd.transport.terminal import Terminal, terminal_for
 
 # Bytes queued for a client that does not read before further output is dropped (logged once).
 MAX_PENDING_OUTPUT = 256 * 1024
+#: What one read takes from a socket at most (the service takes FEED_BITE of it at a time).
+READ_SIZE = 64 * 1024
 
 _serial = itertools.count(1)
 
+# The one buffer every connection reads into (issue 16). asyncio's Protocol gets a new bytes
+# object for each read, made 256 KiB large and then shrunk to what came, which for the few
+# bytes of a command costs more than the command (an mmap, a page fault, an munmap each time);
+# a BufferedProtocol gives asyncio a buffer to read into instead. The loop calls get_buffer,
+# reads into it and calls buffer_updated at once, in one callback on its one thread, so all
+# connections share one buffer: what buffer_updated does not hand on at once, it copies.
+_READ_BUFFER = memoryview(bytearray(READ_SIZE))
 
-class TcpClient(asyncio.Protocol):
+
+class TcpClient(asyncio.BufferedProtocol):
     def __init__(
         self, service: BoardService, endpoint: str, policy: str, terminal: bool = False
     ) -> None:
@@ -82,7 +92,26 @@ class TcpClient(asyncio.Protocol):
         service.log.info(f"{service.name}: {self.label} connected")
         service.attach(self)
 
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return _READ_BUFFER
+
+    def buffer_updated(self, nbytes: int) -> None:
+        if self.transport is None:
+            return
+        data = bytes(_READ_BUFFER[:nbytes])
+        if self._pending or self.terminal is not None:
+            self._take(data)
+            self._push()
+            return
+        # the fast path: nothing held back from before and no line editing, so the bytes go to
+        # the board as they came, and only what it does not take is kept (as _push would)
+        taken = self.service.feed(self, data)
+        if taken < nbytes:
+            self._pending += data[taken:]
+            self._flow()
+
     def data_received(self, data: bytes) -> None:
+        """Bytes the client wrote (what :meth:`buffer_updated` does, for a caller with bytes)."""
         if self.transport is None:
             return
         self._take(data)
@@ -131,6 +160,9 @@ class TcpClient(asyncio.Protocol):
         if self._pending:
             taken = self.service.feed(self, bytes(self._pending))
             del self._pending[:taken]
+        self._flow()
+
+    def _flow(self) -> None:
         transport = self.transport
         if transport is None:
             return

@@ -229,6 +229,8 @@ def test_the_log_says_when_a_wait_holds_input_and_when_it_ends(
     a.send(b"AX VL4000 MR400 GO ID ! AX RP")
     assert a.read_until(b"\n") == b"!\x01\n"
     assert a.ask(b"") == b"400"
+    # the log's lines of a turn are written after its replies (issue 16): wait for them
+    assert wait_for(lambda: "passing on 6 held bytes" in s.daemon.stderr), s.daemon.stderr
     err = s.daemon.stderr
     assert "driver link: ! holds the host's input: waiting for done on X" in err, err
     assert "driver link: done after 0." in err and "passing on 6 held bytes" in err, err

@@ -11,7 +11,6 @@ from omsd.dialects.interpreter import Interpreter
 from omsd.dialects.pcix.common import (
     PCIX_HANDLERS,
     apply_to,
-    fixed,
     flag_axes,
     handles,
     one_integer,
@@ -59,13 +58,20 @@ def _gain(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     apply_to(ix, cmd, cell, [ix.axis], _set_gains(**{name: number}), t)
 
 
+#: "?KP" -> the ServoGains field, and the reply's format for a gain with places ("kp%.2f",
+#: the same digits as ``fixed``) or its prefix for an integer one ("kf")
+_GAIN_QUERIES: dict[str, tuple[str, str, bool]] = {
+    "?" + m: (name, f"{m.lower()}%.{places}f" if places is not None else m.lower(), places is None)
+    for m, (name, places) in _GAINS.items()
+}
+_FACTORY_GAINS = ServoGains()
+
+
 def _gain_query(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    mnemonic = cmd.mnemonic[1:]
-    name, places = _GAINS[mnemonic]
+    name, form, integer = _GAIN_QUERIES[cmd.mnemonic]
     servo = ix.axis.servo
-    value = float(getattr(servo.gains if servo is not None else ServoGains(), name))
-    text = fixed(value, places) if places is not None else str(math.trunc(value))
-    reply(ix, mnemonic.lower() + text, t)
+    value = float(getattr(servo.gains if servo is not None else _FACTORY_GAINS, name))
+    reply(ix, form + str(math.trunc(value)) if integer else form % value, t)
 
 
 for _m in _GAINS:

@@ -46,7 +46,11 @@ def _list(ix: Interpreter, fn: Callable[[Axis], str], t: float) -> None:
 
 @handles("RP")
 def _rp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    _list(ix, lambda a: str(a.counter(t)), t)
+    if ix.mode == "single":  # the query polled most: one axis, said without a list
+        machine = ix.machine
+        machine.reply_value(str(machine.axes[ix.axis_index].counter(t)), t)
+    else:
+        _list(ix, lambda a: str(a.counter(t)), t)
 
 
 @handles("RQ")

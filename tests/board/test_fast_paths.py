@@ -1,0 +1,383 @@
+"""The fast paths change no reply (issue 16): differential tests.
+
+A board with the fast paths and one without (``Board(model, fast_paths=False)``, the
+straightforward code) are given the same random steps (:class:`twin.Twin`): command streams
+(the fuzzing host's command soup, runs of reports, statements that move the axes), time passing
+and deadlines visited (also a hair before and after one), the world changed, registers read,
+output taken, the card switched off and on, from two sessions. After every step the two must
+have said the same bytes and events, at the same times, to the same sessions, and be in the
+same state. Then the sessions scenarios (``tests/board/test_sessions.py``, and the property of
+``tests/robustness/test_sessions.py`` through both links) are run on twins.
+
+Below them, the fast paths are shown to be taken where they are meant to be (a change that
+quietly stopped taking them would still pass the rest), and the promise the receive fast path
+rests on is checked for every model: a report leaves the interpreter holding nothing and
+queues nothing.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import random
+from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from robustness import test_sessions as robust_sessions
+from robustness.conftest import long_pass
+from robustness.fuzz import ALL_MODELS, command_soup
+from twin import Twin
+
+from omsd.board import Board
+from omsd.board.world import AxisWorld
+from omsd.engine.pieces import Cosine, Decay, Poly, Sinusoid, cruise
+from omsd.engine.trajectory import Trajectory
+from omsd.models import MODELS, get_model
+
+#: Statements that move the axes (and so make deadlines, waits and events), valid in both
+#: languages (``;`` ends a PC48 word too); the ones a model lacks are command errors.
+STATEMENTS = [
+    "AX;VL5000;AC50000;MR3000;GO;ID;",
+    "AY;VL2000;AC20000;JG2000;",
+    "AZ;VL1000;AC10000;MR-500;GO;ID;",
+    "AA;VL4000,4000;AC40000,40000;MR100,-200;GO;ID;",
+    "AX;WT50;MR10;GO;",
+    "AT;LS3;MR20;GO;LE;ID;",
+    "AX;ST;",
+    "AY;ST;",
+    "KL;",
+    "AX;HM;",
+    "AX;MA0;GO;ID;",
+    "AX;WQ;RP;",
+    "AX;JG-3000;",
+    "EN;",
+    "EF;",
+    "IC;",
+    "AX;RA;",
+    "\x19",
+    "\x04",
+    "AM;MR10,20;GO;",
+    "AX;VL100000;AC1000000;MR1000000;GO;",
+]
+SEPARATORS = ["", " ", ";", "\r", "  ", "\n"]
+#: A stage with its switches within reach of the moves above.
+WORLD = {
+    "X": AxisWorld(positive_limit=2_500.0, negative_limit=-2_500.0, home_low=40.0, home_high=60.0),
+    "Y": AxisWorld(positive_limit=600.0),
+}
+
+
+def report_run(board: Board, rng: random.Random, count: int) -> bytes:
+    """``count`` reports of the board's language (any spelling) with separators, or none,
+    between them: what the receive fast path takes."""
+    words = sorted(board.interpreter.words.reports)
+    return b"".join(rng.choice(words) + rng.choice(SEPARATORS).encode() for _ in range(count))
+
+
+def world_change(twin: Twin, rng: random.Random, now: float) -> None:
+    model = twin.model
+    axis = rng.choice(model.axes)
+    kind = rng.randrange(7)
+    if kind == 0:
+        twin.set_limit(axis, rng.choice((1, -1)), rng.choice((True, False, None)), now)
+    elif kind == 1:
+        twin.set_home(axis, rng.choice((True, False, None)), now)
+    elif kind == 2 and model.io_bits:
+        twin.set_input(rng.randrange(model.io_bits), rng.choice((True, False, None)), now)
+    elif kind == 3 and model.io_bits:
+        twin.wire_input_to_aux(rng.randrange(model.io_bits), rng.choice((axis, None)))
+    elif kind == 4:
+        twin.inject_slip(axis, rng.choice((3.0, -40.0, 0.5)), now)
+    elif kind == 5:
+        twin.set_stall(axis, rng.choice((True, False)), now)
+    else:
+        twin.set_encoder_input(axis, rng.randrange(-500, 500), now)
+
+
+SOURCE = st.sampled_from([1, 1, 1, 2, 0])
+GAP = st.sampled_from([0.0, 0.0, 1e-4, 0.01, 0.3, 2.0])
+STEP = st.one_of(
+    st.tuples(st.just("soup"), st.integers(0, 2**32 - 1), st.integers(1, 40), SOURCE, GAP),
+    st.tuples(st.just("reports"), st.integers(0, 2**32 - 1), st.integers(1, 90), SOURCE, GAP),
+    st.tuples(st.just("statement"), st.integers(0, len(STATEMENTS) - 1), SOURCE, GAP),
+    st.tuples(st.just("run"), st.floats(0.0, 3.0)),
+    st.tuples(st.just("deadline"), st.sampled_from([-1e-9, -1e-12, 0.0, 1e-12, 1e-9])),
+    st.tuples(st.just("world"), st.integers(0, 2**32 - 1)),
+    st.tuples(st.just("take"), st.just(0)),
+    st.tuples(st.just("registers"), st.just(0)),
+    st.tuples(st.just("snapshot"), st.just(0)),
+    st.tuples(st.just("power"), st.just(0)),
+)
+
+
+def play(model: str, steps: list[tuple[Any, ...]]) -> Twin:
+    twin = Twin(get_model(model), world=WORLD)
+    now = 0.0
+    for step in steps:
+        kind = step[0]
+        if kind in ("soup", "reports", "statement"):
+            source, gap = step[-2], step[-1]
+            now += gap
+            if kind == "soup":
+                data = command_soup(random.Random(step[1]), twin.model, step[2])
+            elif kind == "reports":
+                data = report_run(twin.fast, random.Random(step[1]), step[2])
+            else:
+                data = STATEMENTS[step[1]].encode()
+            twin.receive(data, now, source)  # what is not taken is dropped, by both
+        elif kind == "run":
+            until = now + step[1]
+            while (d := twin.next_deadline()) is not None and d <= until:
+                now = max(now, d)
+                twin.advance(now)
+            now = until
+            twin.advance(now)
+        elif kind == "deadline":
+            d = twin.next_deadline()
+            if d is not None:
+                now = max(now, d + step[1])  # the next step comes just before, at or after it
+        elif kind == "world":
+            world_change(twin, random.Random(step[1]), now)
+        elif kind == "take":
+            twin.take_output_sourced()
+        elif kind == "registers":
+            twin.read_status_register(now)
+            twin.read_done_register(now)
+        elif kind == "snapshot":
+            twin.snapshot(now)
+        else:
+            twin.power_cycle(now)
+    twin.take_output_sourced()
+    return twin
+
+
+@pytest.mark.parametrize("model", ALL_MODELS)
+def test_random_streams_say_the_same_with_and_without_fast_paths(
+    model: str, request: pytest.FixtureRequest
+) -> None:
+    """60 streams a model; ``pytest --long`` (or ``OMSD_LONG=1``): 2,000."""
+
+    @settings(
+        max_examples=2000 if long_pass(request.config) else 60,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
+    @given(steps=st.lists(STEP, min_size=4, max_size=40))
+    def streams(steps: list[tuple[Any, ...]]) -> None:
+        play(model, steps)
+
+    streams()
+
+
+@pytest.mark.parametrize("model", ["PC48-8", "PCIX-400"])
+def test_a_polled_board_in_motion_says_the_same(model: str) -> None:
+    """The load benchmark's traffic, deadline by deadline: axes jogging and running queued
+    moves, each polled with ``QA RP`` in turn, ten times a second."""
+    twin = Twin(get_model(model))
+    axes = twin.model.axes
+    twin.receive(b"AA;VL5000" + b",5000" * (len(axes) - 1) + b";", 0.0, 1)
+    for i, letter in enumerate(axes):
+        job = f"JG{2000 * (-1) ** i};" if i < 4 else "MR3000;GO;MR-3000;GO;" * 3
+        twin.receive(f"A{letter};{job}".encode(), 0.0, 1)
+    now = 0.0
+    for k in range(80):
+        now += 0.1
+        while (d := twin.next_deadline()) is not None and d <= now:
+            twin.advance(d)
+        twin.receive(f"A{axes[k % len(axes)]} QA RP;".encode(), now, 1)
+        twin.take_output_sourced()
+
+
+def _load(path: Path, name: str) -> ModuleType:
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+_SESSIONS = _load(Path(__file__).parent / "test_sessions.py", "_twin_sessions")
+_SCENARIOS = sorted(name for name in vars(_SESSIONS) if name.startswith("test_"))
+
+
+@pytest.mark.parametrize("scenario", _SCENARIOS)
+def test_sessions_scenarios_say_the_same(scenario: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """tests/board/test_sessions.py (two sessions on one board), on twins."""
+    monkeypatch.setattr(_SESSIONS, "Board", Twin)
+    getattr(_SESSIONS, scenario)()
+
+
+def test_sessions_through_the_links_say_the_same(monkeypatch: pytest.MonkeyPatch) -> None:
+    """tests/robustness/test_sessions.py's property (two clients through either link, one
+    going mid-stream), on twins."""
+    monkeypatch.setattr(robust_sessions, "Board", Twin)
+    prop: Callable[[], None] = robust_sessions.test_replies_never_cross_sessions
+    prop()
+
+
+# -- the fast paths are taken -------------------------------------------------------------------
+
+
+def counting(board: Board, monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Count the board's settles and the interpreter's pumps."""
+    calls = {"settle": 0, "pump": 0}
+    for owner, name in ((board, "settle"), (board.interpreter, "pump")):
+        original = getattr(owner, name)
+
+        def counted(*args: Any, _original: Any = original, _name: str = name) -> Any:
+            calls[_name] += 1
+            return _original(*args)
+
+        monkeypatch.setattr(owner, name, counted)
+    return calls
+
+
+@pytest.mark.parametrize(
+    ("model", "data", "reply"),
+    [
+        ("PC48-4E", b"RP", b"\n\r0\n\r"),
+        ("PC48-4E", b"QA", b"\n\r\rPNNN\n\r\r"),
+        ("PC48-8", b"AY QA RP;", b"\n\r\rPNNN\n\r\r\n\r0\n\r"),
+        ("PCIX-400", b"?KP", b"kp10.00\n\r"),
+        ("PCIX-400", b"AY;RP;", b"0\n\r"),
+    ],
+)
+def test_a_report_on_a_board_at_rest_is_answered_without_a_settle(
+    model: str, data: bytes, reply: bytes, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    board = Board(get_model(model))
+    board.receive(b"WY;", 0.0)
+    board.take_output()
+    calls = counting(board, monkeypatch)
+    assert board.receive(data, 1.0) == len(data)
+    assert board.take_bytes() == reply
+    assert calls == {"settle": 0, "pump": 0}
+
+
+def test_a_poll_of_a_board_in_motion_is_answered_without_a_settle(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    board = Board(get_model("PC48-8"))
+    board.receive(b"AA VL5000,5000; AX JG2000; AY MR3000 GO MR-3000 GO ", 0.0)
+    board.advance(0.3)
+    board.take_output()
+    calls = counting(board, monkeypatch)
+    board.receive(b"AX QA RP;", 0.3)
+    assert board.take_bytes() == b"\n\r\rPNNN\n\r\r\n\r598\n\r"  # 2000 steps/s, less the ramp
+    assert calls == {"settle": 0, "pump": 0}
+
+
+def test_the_fast_paths_step_aside(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Something due, a command that is not a report, another session's characters, or a board
+    still initialising: the regular way."""
+    board = Board(get_model("PC48-4"))
+    board.receive(b"AX VL1000 AC10000 MR100 GO ", 0.0)
+    calls = counting(board, monkeypatch)
+    board.receive(b"RP", 5.0)  # the move ended meanwhile
+    assert calls["settle"] > 0
+    calls["settle"] = 0
+    board.receive(b"RP MR1 ", 5.0)
+    assert calls["settle"] > 0
+    board.reset(6.0)
+    calls["settle"] = calls["pump"] = 0
+    board.receive(b"RP", 6.01)
+    assert calls["pump"] > 0
+
+
+def test_the_next_deadline_is_found_again_only_when_an_axis_changed() -> None:
+    board = Board(get_model("PC48-8"))
+    board.receive(b"AX VL1000 AC10000 MR1000 GO ", 0.0)
+    first = board.next_deadline()
+    assert first is not None and not board.deadline_stale
+    board.receive(b"AY RP ", 0.1)
+    assert not board.deadline_stale and board.next_deadline() == first
+    board.receive(b"AY MR10 GO ", 0.1)  # another axis starts, and ends first: found again
+    again = board.next_deadline()
+    assert again is not None and again < first
+
+
+# -- what the receive fast path rests on --------------------------------------------------------
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_every_report_leaves_the_interpreter_holding_nothing(model: str) -> None:
+    """``Board._reports_at_rest`` runs reports one after the other without the input buffer: each
+    must queue nothing and leave nothing to read, whatever the mode (single, AA, AM)."""
+    for mode in ("", "AA;", "AM;"):
+        board = Board(get_model(model))
+        board.receive(f"AX;{mode}".encode(), 0.0)
+        board.take_output()
+        for word, command in sorted(board.interpreter.words.reports.items()):
+            board.receive(word, 1.0)
+            assert board.interpreter.holds_nothing(), (word, mode)
+            assert all(not a.queue.program for a in board.axes), (word, mode)
+            assert board.at_rest(1.0) or board.deadline_stale, (word, mode)
+            assert command.mnemonic in board.dialect.reports
+            board.take_output()
+
+
+# -- a trajectory's extent ------------------------------------------------------------------------
+
+_PIECE = st.one_of(
+    st.builds(
+        Poly,
+        st.floats(-5e4, 5e4),
+        st.floats(-1e6, 1e6),
+        st.floats(-1e7, 1e7),
+        st.floats(1e-4, 0.5),
+    ),
+    st.builds(
+        Cosine, st.floats(-5e4, 5e4), st.floats(-5e4, 5e4), st.floats(1.0, 100.0), st.just(0.02)
+    ),
+    st.builds(Decay, st.floats(-100, 100), st.floats(0.5, 50.0), st.floats(1e-3, 1.0)),
+    st.builds(
+        Sinusoid,
+        st.floats(-1e4, 1e4),
+        st.floats(-4.0, 4.0),
+        st.floats(-20.0, 20.0),
+        st.floats(1e-3, 1.0),
+    ),
+)
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    pieces=st.lists(_PIECE, min_size=1, max_size=5),
+    forever=st.sampled_from([None, 0.0, 3000.0, -3000.0]),
+    x0=st.floats(-1e5, 1e5),
+    levels=st.lists(st.floats(-3e5, 3e5), min_size=1, max_size=6),
+    offsets=st.lists(st.sampled_from([0.0, 1e-9, -1e-9, 1e-4, -1e-4]), min_size=1, max_size=6),
+    start=st.floats(-0.1, 3.0),
+)
+def test_first_time_says_the_same_with_and_without_the_extent(
+    pieces: list[Any],
+    forever: float | None,
+    x0: float,
+    levels: list[float],
+    offsets: list[float],
+    start: float,
+) -> None:
+    """``Trajectory.first_time`` answers "never" at once for a level beyond the trajectory's
+    extent: the same answer the search gives, at the extremes too (levels at them and a hair
+    beyond)."""
+    if forever is not None:
+        pieces = [*pieces, cruise(forever)]
+    traj = Trajectory(0.0, x0, pieces)
+    lowest, highest = traj.extent()
+    candidates = [*levels, lowest, highest]
+    questions = [
+        (level + offset, above, start)
+        for level in candidates
+        for offset in offsets
+        for above in (True, False)
+    ]
+    fast = [traj.first_time(*q) for q in questions]
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(Trajectory, "extent", lambda self: (-math.inf, math.inf))
+        plain = [traj.first_time(*q) for q in questions]
+    assert fast == plain

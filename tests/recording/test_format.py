@@ -1,0 +1,170 @@
+"""The recording file (:mod:`omsd.recording.format`): written and read back, and the daemon's
+own ``--log`` files read as recordings."""
+
+from __future__ import annotations
+
+import io
+import json
+import stat
+from pathlib import Path
+
+import pytest
+
+from omsd.board import AxisWorld, LimitWiring, SwitchType
+from omsd.config import BoardConfig
+from omsd.recording.format import (
+    RecordingError,
+    RecordingWriter,
+    board_from_record,
+    board_record,
+    parse_eos,
+    read_recording,
+)
+from omsd.telemetry.traffic import Direction, TrafficLog
+
+BOARD = BoardConfig(
+    name="xy",
+    model="PCIX-400",
+    link="raw",
+    eos=0x0D,
+    buffer_size=512,
+    world={
+        "X": AxisWorld(negative_limit=-500, home_switch=SwitchType.NORMALLY_CLOSED),
+        "Y": AxisWorld(limit_switches=LimitWiring.NORMALLY_CLOSED, encoder_index=7),
+    },
+    inputs={3: True},
+    firmware="1.30",
+    max_queries=False,
+)
+
+
+def test_a_board_goes_into_a_header_and_comes_back() -> None:
+    record = board_record(BOARD)
+    assert record["model"] == "PCIX-400" and record["eos"] == "0D"
+    # only what differs from the default world is written, enums by value
+    assert record["world"] == {
+        "X": {"negative_limit": -500, "home_switch": "normally_closed"},
+        "Y": {"limit_switches": "normally_closed", "encoder_index": 7},
+    }
+    back = board_from_record(json.loads(json.dumps(record)))
+    assert back == BOARD
+    assert board_from_record({"model": "pc48-4e"}) == BoardConfig(name="card", model="PC48-4E")
+
+
+@pytest.mark.parametrize(
+    ("record", "message"),
+    [
+        ({}, "header: no model"),
+        ({"model": "PC99"}, "unknown board model 'PC99'"),
+        ({"model": "PC48-4E", "link": "serial"}, "link 'serial': expected one of driver, raw"),
+        ({"model": "PC48-4E", "eos": "GG"}, "expected a character code in hex"),
+        ({"model": "PC48-4E", "buffer_size": 3}, "buffer_size 3: expected 16..32767"),
+        ({"model": "PC48-4E", "world": {"X": {"colour": 1}}}, "world or inputs"),
+    ],
+)
+def test_a_header_that_makes_no_board_is_one_line(record: dict[str, object], message: str) -> None:
+    with pytest.raises(RecordingError, match=r"^header: .*") as info:
+        board_from_record(record)
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_eos_is_hex_or_a_number() -> None:
+    assert parse_eos("0A") == parse_eos("0x0a") == parse_eos(10) == 10
+    with pytest.raises(RecordingError, match=r"00\.\.FF"):
+        parse_eos("100")
+
+
+def write(path: Path) -> None:
+    writer = RecordingWriter(path)
+    writer.header(100.0, 1.7e9, BOARD, to="tcp:127.0.0.1:7048", line=None, listen="tcp:x:1")
+    writer.traffic(100.5, "xy", "tcp:x:1 #1", Direction.IN, b"AX RP\x00\xff")
+    writer.traffic(100.75, "xy", "tcp:x:1 #1", Direction.OUT, b"0\n\r")
+    writer.message(101.0, "info", "stopped")
+    writer.close()
+
+
+def test_a_recording_is_written_and_read_back(tmp_path: Path) -> None:
+    path = tmp_path / "session.jsonl"
+    write(path)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o600
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    assert lines[0]["kind"] == "header" and lines[0]["clock"] == "monotonic"
+    assert lines[1] == {
+        "t": 100.5,
+        "kind": "traffic",
+        "board": "xy",
+        "endpoint": "tcp:x:1 #1",
+        "dir": "in",
+        "data": "AX RP\x00\xff",
+        "hex": "4158205250" + "00ff",
+    }
+    recording = read_recording(path)
+    assert recording.header is not None and recording.one_stream
+    assert board_from_record(recording.header) == BOARD
+    assert [(c.time, c.direction, c.data) for c in recording.chunks] == [
+        (0.0, Direction.IN, b"AX RP\x00\xff"),
+        (0.25, Direction.OUT, b"0\n\r"),
+    ]
+    assert recording.notes == [(0.5, "info", "stopped")] and recording.duration == 0.5
+    assert recording.line is None and not recording.truncated
+
+
+def test_a_recording_is_one_session_a_full_file_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "session.jsonl"
+    write(path)
+    with pytest.raises(FileExistsError, match="is not empty: a recording is one session"):
+        RecordingWriter(path)
+    empty = tmp_path / "empty.jsonl"
+    empty.touch()
+    RecordingWriter(empty).close()  # an empty file is fine
+
+
+def test_a_last_line_cut_short_is_left_out_and_said(tmp_path: Path) -> None:
+    path = tmp_path / "session.jsonl"
+    write(path)
+    with path.open("a") as f:
+        f.write('{"t": 102.0, "kind": "traff')
+    recording = read_recording(path)
+    assert recording.truncated and len(recording.chunks) == 2
+    lines = path.read_text().splitlines()
+    lines.insert(2, "{not json")
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match=r"session.jsonl:3: not a JSON object"):
+        read_recording(path)
+
+
+def daemon_log(path: Path) -> None:
+    """A daemon's --log file as the daemon writes it: wall-clock times, two boards, several
+    clients, the serving lines and the session ends."""
+    clock = iter([1.7e9 + i for i in range(100)])
+    log = TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda: next(clock))
+    log.info("serving xy PC48-4E driver tcp 127.0.0.1:7001")
+    log.info("serving z PCIX-400 raw tcp 127.0.0.1:7002")
+    log.traffic(1.7e9 + 10, "xy", "tcp:127.0.0.1:7001 #1 (a)", Direction.IN, b"WY")
+    log.traffic(1.7e9 + 10.5, "z", "tcp:127.0.0.1:7002 #2 (b)", Direction.IN, b"RP")
+    log.traffic(1.7e9 + 11, "xy", "tcp:127.0.0.1:7001 #1 (a)", Direction.OUT, b"PC48\n")
+    log.info("xy: tcp:127.0.0.1:7001 #1 (a) disconnected")
+    log.traffic(1.7e9 + 12, "xy", "(gone: tcp:127.0.0.1:7001 #1 (a))", Direction.OUT, b"!\x01\n")
+    log.event(1.7e9 + 12, "xy", "done X")
+    log.close()
+
+
+def test_a_daemon_log_is_read_board_by_board(tmp_path: Path) -> None:
+    path = tmp_path / "traffic.jsonl"
+    daemon_log(path)
+    with pytest.raises(RecordingError, match=r"several boards \(xy, z\): choose one with --board"):
+        read_recording(path)
+    with pytest.raises(RecordingError, match=r"no traffic of board q \(it has xy, z\)"):
+        read_recording(path, "q")
+    recording = read_recording(path, "xy")
+    assert recording.header is None and not recording.one_stream
+    assert recording.served == {"xy": ("PC48-4E", "driver"), "z": ("PCIX-400", "raw")}
+    assert [(c.time, c.data, c.endpoint) for c in recording.chunks] == [
+        (0.0, b"WY", "tcp:127.0.0.1:7001 #1 (a)"),
+        (1.0, b"PC48\n", "tcp:127.0.0.1:7001 #1 (a)"),
+        (2.0, b"!\x01\n", "(gone: tcp:127.0.0.1:7001 #1 (a))"),
+    ]
+    assert ("info", "xy: tcp:127.0.0.1:7001 #1 (a) disconnected") in [
+        (kind, text) for _, kind, text in recording.notes
+    ]
+    assert [c.data for c in read_recording(path, "z").chunks] == [b"RP"]

@@ -1,0 +1,94 @@
+"""What each command imports (issue 16: ``omsd --help``, ``omsd models`` and ``omsd ctl`` within
+3x ``python -c pass``, "import the engine only where it is used"). The commands import their
+modules when they run (``omsd/cli.py``); these tests hold each to what it needs, by the modules
+loaded once it has run. Timings are the benchmark's (``python -m bench --only startup``)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import omsd.config
+import omsd.link
+from omsd import defaults
+
+#: Loaded by none of the light commands: asyncio, the engine and everything above the defaults.
+HEAVY = (
+    "asyncio",
+    "pydantic",
+    "rich",
+    "aiomqtt",
+    "omsd.board",
+    "omsd.engine",
+    "omsd.dialects",
+    "omsd.protocol",
+    "omsd.link",
+    "omsd.service",
+    "omsd.daemon",
+    "omsd.config",
+)
+
+
+def loaded(argv: list[str]) -> list[str]:
+    """The modules loaded after ``omsd ARGV`` ran, in a fresh interpreter."""
+    code = (
+        "import sys\nfrom omsd import cli\n"
+        f"try:\n    cli.main({argv!r})\nexcept SystemExit:\n    pass\n"
+        "print(' '.join(sorted(sys.modules)), file=sys.stderr)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False
+    )
+    return done.stderr.strip().splitlines()[-1].split()
+
+
+def under(modules: list[str], packages: tuple[str, ...]) -> list[str]:
+    return [m for m in modules if any(m == p or m.startswith(p + ".") for p in packages)]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--help"],
+        ["--version"],
+        ["config", "--help"],
+        ["models"],
+        ["ctl", "--help"],
+        ["ctl", "--socket", "/nonexistent/omsd.sock", "boards"],
+    ],
+)
+def test_light_commands_import_no_engine_nor_event_loop(argv: list[str]) -> None:
+    modules = loaded(argv)
+    assert "omsd.cli" in modules
+    assert under(modules, HEAVY) == [], argv
+
+
+def test_help_imports_only_the_parser_and_the_defaults() -> None:
+    """``omsd --help`` needs argparse, the help texts and the defaults they quote."""
+    omsd = [m for m in loaded(["--help"]) if m == "omsd" or m.startswith("omsd.")]
+    assert omsd == [
+        "omsd",
+        "omsd.cli",
+        "omsd.defaults",
+        "omsd.helptext",
+        "omsd.recording",
+        "omsd.recording.cli",
+    ]
+
+
+def test_models_lists_the_rows_without_their_dialects() -> None:
+    modules = loaded(["models"])
+    assert "omsd.models" in modules
+    assert under(modules, ("omsd.dialects", "omsd.commands", "dataclasses")) == ["dataclasses"]
+
+
+def test_the_defaults_are_the_configurations() -> None:
+    """``omsd.defaults`` is where omsd.config's defaults are defined (one definition, re-exported
+    there), and the command line's --link choices are the links omsd.link makes."""
+    constants = [name for name in omsd.config.__all__ if name.isupper()]
+    assert constants and set(constants) <= set(defaults.__all__)
+    for name in set(defaults.__all__) & set(omsd.config.__all__):
+        assert getattr(omsd.config, name) is getattr(defaults, name), name
+    assert defaults.LINKS == omsd.link.KINDS
