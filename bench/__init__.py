@@ -18,6 +18,8 @@ The benchmarks:
 * :mod:`bench.interp`     one interpreter step in process; long motion on the manual clock;
 * :mod:`bench.throughput` pipelined ``RP`` on one board; 100,000 mixed pipelined commands;
 * :mod:`bench.cost`       CPU of idle boards and of boards in motion being polled, 1 to 128;
+* :mod:`bench.watch`      ``omsd top`` open on 8 moving boards: the daemon's CPU rise, both
+  sides' memory; a subscriber that never reads;
 * :mod:`bench.scale`      1,000 boards in one daemon: ready time, memory, idle CPU;
 * :mod:`bench.fidelity`   when a move's done marker arrives against the manual's profile;
 * :mod:`bench.startup`    the commands a user types, and the daemon's first accept;

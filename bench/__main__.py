@@ -33,6 +33,7 @@ from bench import (
     startup,
     throughput,
     versions,
+    watch,
 )
 from bench.settings import FULL, QUICK, Settings
 from bench.table import Row, render
@@ -47,6 +48,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "throughput": throughput.run,
     "idle": cost.idle,
     "load": cost.load,
+    "watch": watch.run,
     "scale": scale.run,
     "fidelity": fidelity.run,
     "startup": startup.run,

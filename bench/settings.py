@@ -19,6 +19,7 @@ class Settings:
     load_seconds: float  # CPU measurement window, boards in motion
     load_settle: float  # seconds of traffic before the window opens
     load_boards: tuple[int, ...]  # board counts of the load benchmark
+    watch_seconds: float  # each window of the subscription benchmark (omsd top open, or not)
     scale_boards: int  # boards in one daemon for ready time, memory and idle CPU
     scale_idle_seconds: float  # CPU measurement window of those boards, idle
     fidelity_moves: int  # moves timed on the real clock
@@ -44,6 +45,7 @@ FULL = Settings(
     load_seconds=10.0,
     load_settle=1.0,
     load_boards=(1, 8, 32, 128),
+    watch_seconds=10.0,
     scale_boards=1000,
     scale_idle_seconds=5.0,
     fidelity_moves=20,
@@ -68,6 +70,7 @@ QUICK = Settings(
     load_seconds=0.6,
     load_settle=0.2,
     load_boards=(1, 8, 128),
+    watch_seconds=1.0,
     scale_boards=200,
     scale_idle_seconds=0.5,
     fidelity_moves=3,

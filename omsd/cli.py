@@ -1,9 +1,9 @@
 """The ``omsd`` command line.
 
 ``omsd`` alone serves the built-in default (one PC48-4E on TCP 127.0.0.1:7048 and on a pty);
-``--board/--tcp/--pty/--link/--eos/--log`` describe one board without a file (``--tcp`` or
-``--pty`` given replaces both defaults: ``--tcp`` alone serves no pty, and the daemon says so in
-its log); ``--config FILE`` describes several. ``--state FILE`` keeps the boards' flash memory
+``--board/--tcp/--pty/--serial/--rfc2217/--link/--eos/--log`` describe one board without a file
+(any endpoint given replaces both defaults: ``--tcp`` alone serves no pty, and the daemon says so
+in its log); ``--config FILE`` describes several. ``--state FILE`` keeps the boards' flash memory
 (AP defaults, permanent macros) across restarts, with either form. ``omsd models`` lists the
 personalities; ``omsd commands MODEL`` the commands one understands (:mod:`omsd.commands`);
 ``omsd console`` talks to one board on this terminal without serving it, or runs a command
@@ -35,6 +35,7 @@ import sys
 from omsd import __version__
 from omsd.defaults import (
     CONSOLE_WAIT,
+    DEFAULT_BAUD,
     DEFAULT_EOS,
     DEFAULT_HOST,
     DEFAULT_LINK,
@@ -63,12 +64,12 @@ def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="omsd",
         usage="omsd [--config FILE | --board MODEL --tcp [HOST:]PORT ...] [OPTIONS]\n"
-        "       omsd {models,commands,console,config,ctl} ...\n"
+        "       omsd {models,commands,console,config,ctl,top} ...\n"
         "       omsd {record,replay} ...",
         description="Virtual Oregon Micro Systems motion controllers (PC48, PC46, VS4,\n"
-        "PCIx), served over pty and TCP. With no COMMAND, serve the boards until\n"
-        "Ctrl-C or SIGTERM: one line per endpoint on standard output (board, model,\n"
-        "link, kind, address), the traffic on standard error.",
+        "PCIx), served over pty, TCP, serial devices and RFC 2217. With no COMMAND,\n"
+        "serve the boards until Ctrl-C or SIGTERM: one line per endpoint on standard\n"
+        "output (board, model, link, kind, address), the traffic on standard error.",
         epilog=examples(
             ("omsd", "a PC48-4E on 127.0.0.1:7048 and a pty"),
             ("omsd --board PCIX-400 --tcp 0", "a PCIx on a free port, no pty"),
@@ -108,6 +109,24 @@ def _parser() -> argparse.ArgumentParser:
         default=[],
         help="serve on a pty with a symlink at PATH; repeatable (default:"
         " $XDG_RUNTIME_DIR/omsd/board1, with the default TCP port). Given without --tcp: no TCP",
+    )
+    p.add_argument(
+        "--serial",
+        metavar="PATH[,BAUD[,8N1]]",
+        action="append",
+        default=[],
+        help="serve on a serial device (a USB adapter) set to BAUD, data bits, parity and stop"
+        " bits, and ,rtscts or ,xonxoff after them for flow control; repeatable (default: none;"
+        f" {DEFAULT_BAUD},8N1 without flow control when not given). Replaces the default"
+        " endpoints",
+    )
+    p.add_argument(
+        "--rfc2217",
+        metavar="[HOST:]PORT",
+        action="append",
+        default=[],
+        help="serve RFC 2217 (telnet COM port control) clients such as pyserial's rfc2217://;"
+        " repeatable (default: none). Replaces the default endpoints",
     )
     p.add_argument(
         "--link",
@@ -233,6 +252,9 @@ def _parser() -> argparse.ArgumentParser:
     # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
     ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
     ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
+    from omsd.topcli import add_top_parser  # (argparse only)
+
+    add_top_parser(sub)
     return p
 
 
@@ -359,6 +381,10 @@ def main(argv: list[str] | None = None) -> int:
         from omsd.recording.cli import run_replay
 
         return run_replay(args)
+    if args.command == "top":
+        from omsd.topcli import run_top
+
+        return run_top(args)
     if args.command == "console":
         from omsd.models import UnknownModel, get_model
 
@@ -427,14 +453,24 @@ def _start_and_serve(args: argparse.Namespace) -> int:
     try:
         if args.config:
             single = [
-                o for o in ("board", "tcp", "pty", "link", "eos", "terminal") if getattr(args, o)
+                o
+                for o in ("board", "tcp", "pty", "serial", "rfc2217", "link", "eos", "terminal")
+                if getattr(args, o)
             ]
             if single:
                 raise ConfigError(f"--{single[0]}", None, "cannot be combined with --config")
             config = load_config(args.config)
         else:
             config = from_options(
-                args.board, args.tcp, args.pty, args.link, args.eos, None, args.terminal
+                args.board,
+                args.tcp,
+                args.pty,
+                args.link,
+                args.eos,
+                None,
+                args.terminal,
+                serial=args.serial,
+                rfc2217=args.rfc2217,
             )
         config = with_state_option(config, args.state)
         config = with_control_option(config, args.control)

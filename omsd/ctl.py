@@ -450,6 +450,15 @@ def _connect(args: argparse.Namespace) -> Control:
     raise _Unreachable(f"no daemon found: {'; '.join(looked)}. Start omsd, or {_ELSEWHERE}")
 
 
+def connect(socket: Path | None = None, tcp: tuple[str, int] | None = None) -> Control:
+    """A connection to the daemon found where ``omsd ctl`` looks (``omsd top`` looks there too);
+    :class:`Unreachable`, saying where it looked, when there is none."""
+    return _connect(argparse.Namespace(socket=socket, tcp=tcp))
+
+
+Unreachable = _Unreachable
+
+
 def _reason(exc: OSError) -> str:
     if isinstance(exc, FileNotFoundError):
         return "no such socket"
@@ -702,4 +711,4 @@ EXAMPLES: dict[str, tuple[tuple[str, str], ...]] = {
 }
 
 
-__all__ = ["SERVICE_SOCKET", "main", "parser"]
+__all__ = ["SERVICE_SOCKET", "Unreachable", "connect", "main", "parser"]

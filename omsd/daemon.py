@@ -29,10 +29,14 @@ from omsd import sdnotify
 from omsd.config import DaemonConfig, runtime_directory
 from omsd.control.server import ControlServer, SocketInUse
 from omsd.files import Refused, missing_directory, preflight, state_file_problem
+from omsd.pacing import Line
 from omsd.service import BoardService
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import Endpoint
 from omsd.transport.pty import PtyEndpoint
+from omsd.transport.rfc2217 import serve_rfc2217
+from omsd.transport.serial import SerialEndpoint
+from omsd.transport.serial import reason as serial_reason
 from omsd.transport.tcp import serve_tcp
 
 if TYPE_CHECKING:
@@ -132,6 +136,7 @@ class Daemon:
         self.services: list[BoardService] = []
         self.servers: list[asyncio.Server] = []
         self.ptys: list[PtyEndpoint] = []
+        self.serials: list[SerialEndpoint] = []
         self.endpoints: list[Endpoint] = []
         self._stop = asyncio.Event()
         self.saver: FlashSaver | None = None
@@ -207,6 +212,7 @@ class Daemon:
                             board.name, board.model, board.link, "pty", f"{pty.link} -> {device}"
                         )
                     )
+                await self._start_serial(service)
             await self._start_control()
             self._start_mqtt()
             # the endpoint lines go out last: whoever reads them may use the control socket at
@@ -224,6 +230,37 @@ class Daemon:
             self._remove_made_directory(runtime, made_runtime)
             raise
         return self.endpoints
+
+    async def _start_serial(self, service: BoardService) -> None:
+        """The board's serial devices (:mod:`omsd.transport.serial`) and RFC 2217 sockets
+        (:mod:`omsd.transport.rfc2217`)."""
+        board = service.config
+        for serial in board.serial_port:
+            line = Line(serial.baud, serial.bytesize, serial.parity, serial.stopbits)
+            port = SerialEndpoint(service, serial.path, line, serial.flow, serial.pacing)
+            try:
+                address = port.open()
+            except (OSError, ValueError) as exc:
+                port.close()
+                raise StartupError(
+                    f"{board.name}: cannot open serial {serial.path}: {serial_reason(exc)}"
+                ) from None
+            self.serials.append(port)
+            self._announce(Endpoint(board.name, board.model, board.link, "serial", address))
+        for rfc in board.rfc2217:
+            try:
+                server, host, port_number = await serve_rfc2217(
+                    service, rfc.host, rfc.port, board.second_client, rfc.pacing
+                )
+            except OSError as exc:
+                reason = os.strerror(exc.errno) if exc.errno else str(exc)
+                raise StartupError(
+                    f"{board.name}: cannot listen on rfc2217 {rfc}: {reason.lower()}"
+                ) from None
+            self.servers.append(server)
+            self._announce(
+                Endpoint(board.name, board.model, board.link, "rfc2217", f"{host}:{port_number}")
+            )
 
     def _say_what_is_not_served(self) -> None:
         """``--tcp`` (or ``--pty``) alone replaces both default endpoints: say that no pty (no
@@ -419,6 +456,8 @@ class Daemon:
                     close()
         for pty in self.ptys:
             pty.close()
+        for serial in self.serials:
+            serial.close()
         for server in self.servers:
             with contextlib.suppress(Exception):
                 await asyncio.wait_for(server.wait_closed(), timeout=2.0)
@@ -428,6 +467,7 @@ class Daemon:
             await self.saver.drain()
         self.servers.clear()
         self.ptys.clear()
+        self.serials.clear()
         self.services.clear()
         if not quiet:
             self.log.info("stopped")

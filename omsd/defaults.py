@@ -30,6 +30,16 @@ DEFAULT_SECOND_CLIENT = "takeover"
 DEFAULT_LINGER = 60.0
 MAX_LINGER = 3600.0
 DEFAULT_PTY_MODE = 0o660
+#: A serial endpoint's line unless configured, as a legacy application's port is set: 9600 baud,
+#: 8 data bits, no parity, 1 stop bit (8N1), no flow control
+DEFAULT_BAUD = 9600
+BAUD_MIN = 50
+BAUD_MAX = 10_000_000
+DEFAULT_BYTESIZE = 8
+DEFAULT_PARITY = "N"
+DEFAULT_STOPBITS = 1
+FLOWS = ("none", "rtscts", "xonxoff")
+DEFAULT_FLOW = "none"
 VIEWS = ("auto", "rich", "plain", "off")
 LOOPS = ("auto", "asyncio", "uvloop")  # --loop (omsd.loops)
 DEFAULT_VIEW = "auto"
@@ -68,24 +78,32 @@ def default_pty_link(name: str) -> Path:
 
 
 __all__ = [
+    "BAUD_MAX",
+    "BAUD_MIN",
     "BUFFER_SIZE_MAX",
     "BUFFER_SIZE_MIN",
     "CONSOLE_WAIT",
     "CONTROL_SOCKET_NAME",
+    "DEFAULT_BAUD",
     "DEFAULT_BOARD_NAME",
     "DEFAULT_BUFFER_SIZE",
+    "DEFAULT_BYTESIZE",
     "DEFAULT_EOS",
+    "DEFAULT_FLOW",
     "DEFAULT_HOST",
     "DEFAULT_KEEPALIVE",
     "DEFAULT_LINGER",
     "DEFAULT_LINK",
     "DEFAULT_MODEL",
     "DEFAULT_MQTT_PREFIX",
+    "DEFAULT_PARITY",
     "DEFAULT_PTY_MODE",
     "DEFAULT_SECOND_CLIENT",
     "DEFAULT_STATE_RATE",
+    "DEFAULT_STOPBITS",
     "DEFAULT_TCP_PORT",
     "DEFAULT_VIEW",
+    "FLOWS",
     "LINKS",
     "MAX_LINGER",
     "MAX_STATE_RATE",

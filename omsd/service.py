@@ -23,6 +23,7 @@ everything.
 from __future__ import annotations
 
 import asyncio
+import functools
 import itertools
 import time
 import traceback
@@ -34,6 +35,7 @@ from omsd.board.events import Event, describe
 from omsd.config import BoardConfig
 from omsd.faults import Faults
 from omsd.link import Link, make_link
+from omsd.pacing import Pacer
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
 from omsd.timebase import Timebase
 from omsd.wakeups import Handle, wakeups_for
@@ -108,7 +110,7 @@ class BoardService:
         self.observers: list[Observer] = []
         self._inbound = bytearray()  # host bytes on a faulty cable, not yet at the board
         self._in_timer: asyncio.TimerHandle | None = None
-        self._out_free_at = 0.0  # loop time the paced line is free again
+        self._out = Pacer(loop)  # the faulty cable's latency and pace, on the way out
         now = self.clock()
         self.model = config.personality()
         self.board = Board(self.model, now=now, world=dict(config.world))
@@ -147,6 +149,8 @@ class BoardService:
     def attach(self, client: Client) -> None:
         self.clients.append(client)
         self.open_session(client)
+        for observer in list(self.observers):
+            observer.changed(self)  # a new client is a change to those who watch the board
 
     def open_session(self, client: Client) -> int:
         """A new conversation on ``client`` (a new connection, a pty opened again)."""
@@ -328,17 +332,14 @@ class BoardService:
         if not data:
             return
         cps = faults.chars_per_second
-        if faults.latency <= 0.0 and cps is None:
+        if faults.latency <= 0.0 and cps is None and not self._out.waiting:
             client.send(data)
             return
-        now = self.loop.time()
-        at = now + faults.latency
-        if cps is None:
-            self.loop.call_at(at, self._send_later, client, data)
-            return
-        for i in range(len(data)):  # one character at a time, at the line's pace
-            self._out_free_at = max(self._out_free_at, at) + 1.0 / cps
-            self.loop.call_at(self._out_free_at, self._send_later, client, data[i : i + 1])
+        # late by the latency, then a character at a time at the line's pace (omsd.pacing)
+        self._out.chars_per_second = cps
+        self._out.send(
+            functools.partial(self._send_later, client), data, self.loop.time() + faults.latency
+        )
 
     def _send_later(self, client: Client, data: bytes) -> None:
         if self._closed or not self.faults.cable:
@@ -451,3 +452,4 @@ class BoardService:
         if self._in_timer is not None:
             self._in_timer.cancel()
             self._in_timer = None
+        self._out.clear()

@@ -63,7 +63,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Generator, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import TracebackType
 from typing import IO, TYPE_CHECKING, Any, NoReturn
@@ -97,13 +97,16 @@ _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 @dataclass(frozen=True)
 class Board:
     """One board of a running daemon and where it can be reached (from the endpoint lines
-    ``board1 PC48-4E driver tcp 127.0.0.1:40123``, ``... pty /path/board1 -> /dev/pts/7``)."""
+    ``board1 PC48-4E driver tcp 127.0.0.1:40123``, ``... pty /path/board1 -> /dev/pts/7``,
+    ``... serial /dev/ttyUSB0,9600,8N1``, ``... rfc2217 127.0.0.1:7148``)."""
 
     name: str
     model: str
     link: str  # "driver" or "raw"
     tcps: tuple[tuple[str, int], ...] = ()
     ptys: tuple[tuple[Path, str], ...] = ()  # (link, device)
+    serials: tuple[str, ...] = ()  # "/dev/ttyUSB0,9600,8N1"
+    rfc2217s: tuple[tuple[str, int], ...] = ()  # (host, port)
 
     @property
     def tcp(self) -> tuple[str, int] | None:
@@ -138,18 +141,22 @@ def _parse_endpoints(lines: list[str]) -> dict[str, Board]:
     boards: dict[str, Board] = {}
     for line in lines:
         parts = line.rstrip("\n").split(" ", 4)
-        if len(parts) != 5 or parts[3] not in ("tcp", "pty"):
+        if len(parts) != 5 or parts[3] not in ("tcp", "pty", "serial", "rfc2217"):
             raise ValueError(f"not an endpoint line: {line!r}")
         name, model, link, kind, address = parts
         board = boards.get(name, Board(name, model, link))
-        if kind == "tcp":
+        if kind in ("tcp", "rfc2217"):
             host, _, port = address.rpartition(":")
-            tcps = (*board.tcps, (host.strip("[]"), int(port)))
-            board = Board(name, model, link, tcps, board.ptys)
-        else:
+            where = (host.strip("[]"), int(port))
+            if kind == "tcp":
+                board = replace(board, tcps=(*board.tcps, where))
+            else:
+                board = replace(board, rfc2217s=(*board.rfc2217s, where))
+        elif kind == "pty":
             path, _, device = address.partition(" -> ")
-            ptys = (*board.ptys, (Path(path), device))
-            board = Board(name, model, link, board.tcps, ptys)
+            board = replace(board, ptys=(*board.ptys, (Path(path), device)))
+        else:
+            board = replace(board, serials=(*board.serials, address))
         boards[name] = board
     return boards
 

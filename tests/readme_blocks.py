@@ -162,6 +162,7 @@ SUBCOMMANDS = frozenset(
         "config",
         "record",
         "replay",
+        "top",
         "-h",
         "--help",
         "--version",

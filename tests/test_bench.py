@@ -27,6 +27,7 @@ from bench.fidelity import RATE, done_after  # noqa: E402
 from bench.latency import median, percentile  # noqa: E402
 from bench.settings import QUICK  # noqa: E402
 from bench.table import Row, Target, render, skipped  # noqa: E402
+from bench.watch import NAMES as WATCH  # noqa: E402
 
 
 def latency_rows(kind: str) -> list[str]:
@@ -64,6 +65,7 @@ ROWS = [
     *(f"load cost, {n} board{'s' * (n > 1)} in motion, polled" for n in QUICK.load_boards),
     f"load growth, CPU per poll, {MOST} vs 1 board(s)",
     f"load over time, CPU 2nd / 1st half, {MOST} boards",
+    *WATCH,
     f"{MANY}: ready, exec to last endpoint line / echo",
     f"{MANY}: resident memory / echo",
     f"{MANY}: memory of one board / echo's per TCP port and pty",

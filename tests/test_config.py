@@ -342,7 +342,8 @@ FILE_ERRORS = [
     ("log = 'x'\n" + MINIMAL, '1: log: expected a table, got "x"'),
     (
         "[[board]]\nname = 'a'\n",
-        '1: [board "a"]: expected at least one endpoint (tcp or pty), got none',
+        '1: [board "a"]: expected at least one endpoint (tcp, pty, serial_port or rfc2217),'
+        " got none",
     ),
     ("[[board]]\ntcp = []\npty = []\n", f"1: {B1}: expected at least one endpoint"),
     # names

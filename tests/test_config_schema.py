@@ -186,6 +186,8 @@ def test_the_command_line_help_quotes_the_schemas_defaults() -> None:
         "--board",
         "--tcp",
         "--pty",
+        "--serial",
+        "--rfc2217",
         "--link",
         "--eos",
         "--log",
@@ -236,6 +238,12 @@ def _bad(prefix: str, key: str) -> str:
         return f"[[board]]\ntcp = {{ {address}{key} = {BAD} }}\n"
     if prefix == "board.pty":
         return f"[[board]]\ntcp = 7001\npty = {{ {key} = {BAD} }}\n"
+    if prefix == "board.serial_port":
+        path = "" if key == "path" else 'path = "/dev/ttyS0", '
+        return f"[[board]]\nserial_port = {{ {path}{key} = {BAD} }}\n"
+    if prefix == "board.rfc2217":
+        address = "" if key == "address" else "address = 7148, "
+        return f"[[board]]\nrfc2217 = {{ {address}{key} = {BAD} }}\n"
     assert prefix == "board.axes.X", prefix
     return f"[[board]]\ntcp = 7001\n[board.axes.X]\n{key} = {BAD}\n"
 

@@ -57,6 +57,8 @@ def under(modules: list[str], packages: tuple[str, ...]) -> list[str]:
         ["models"],
         ["ctl", "--help"],
         ["ctl", "--socket", "/nonexistent/omsd.sock", "boards"],
+        ["top", "--help"],
+        ["top", "--socket", "/nonexistent/omsd.sock"],
     ],
 )
 def test_light_commands_import_no_engine_nor_event_loop(argv: list[str]) -> None:
@@ -75,6 +77,7 @@ def test_help_imports_only_the_parser_and_the_defaults() -> None:
         "omsd.helptext",
         "omsd.recording",
         "omsd.recording.cli",
+        "omsd.topcli",
     ]
 
 

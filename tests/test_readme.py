@@ -147,7 +147,7 @@ def check_endpoints(run_stdout: bytes, sandbox: Sandbox) -> None:
     """A daemon's endpoint lines: at least one, every pty link in the runtime directory or the
     checkout."""
     lines = run_stdout.decode().splitlines()
-    endpoints = [s for s in lines if re.match(r"\S+ \S+ (driver|raw) (tcp|pty) ", s)]
+    endpoints = [s for s in lines if re.match(r"\S+ \S+ (driver|raw) (tcp|pty|serial|rfc2217) ", s)]
     assert endpoints, f"no endpoint lines: {lines}"
     for line in endpoints:
         if " pty " in line:

@@ -28,6 +28,9 @@ them)::
     tcp = ["127.0.0.1:7001"]   # "[HOST:]PORT" or PORT, {address, terminal}, or a list of them
     pty = "/run/omsd/xy"       # path, true (the default link), {link, group, mode, terminal},
                                # or a list
+    serial_port = "/dev/ttyUSB0,9600,8N1"  # PATH[,BAUD[,8N1]], {path, baud, bytesize, parity,
+                               # stopbits, flow, pacing}, or a list
+    rfc2217 = "127.0.0.1:7148" # as tcp, or {address, pacing}, or a list
 
     [board.axes.X]             # any field of omsd.board.AxisWorld
     negative_limit = -50000
@@ -44,11 +47,13 @@ Choices where the issue is silent:
 * A TCP endpoint without a host binds 127.0.0.1. ``:7001`` is refused as ambiguous (some tools
   read it as "every interface"): write ``0.0.0.0:7001``. IPv6 addresses go in brackets,
   ``[::1]:7001``. Port 0 asks the OS for a free port, and may appear any number of times.
-* Two endpoints conflict if they are the same TCP address and port, a wildcard (``0.0.0.0``,
-  ``::``) and an address of its family on the same port, or the same pty link.
+* Two endpoints conflict if they are the same TCP address and port (plain TCP and RFC 2217
+  alike), a wildcard (``0.0.0.0``, ``::``) and an address of its family on the same port, the
+  same pty link, or the same serial device.
 * A board in a file needs at least one endpoint; the command line falls back to the defaults
-  (TCP 127.0.0.1:7048 and a pty at :func:`default_pty_link`) when neither --tcp nor --pty is
-  given.
+  (TCP 127.0.0.1:7048 and a pty at :func:`default_pty_link`) when none of --tcp, --pty,
+  --serial and --rfc2217 is given.
+* The serial endpoint's key is ``serial_port``: ``serial`` is the serial number WY reports.
 * Encoder settings on an axis without an encoder are an error, as is a limit or home window that
   is empty (negative_limit >= positive_limit, home_low >= home_high).
 * The boards' flash memory (a PCIx's AP power-up defaults and permanent macros, "stored in
@@ -71,23 +76,31 @@ from omsd.config_errors import ConfigError
 # The defaults and default places are defined in omsd.defaults (the schema gives them to its keys,
 # the objects below to their fields, the command line's help quotes them) and re-exported here.
 from omsd.defaults import (
+    BAUD_MAX,
+    BAUD_MIN,
     BUFFER_SIZE_MAX,
     BUFFER_SIZE_MIN,
     CONTROL_SOCKET_NAME,
+    DEFAULT_BAUD,
     DEFAULT_BOARD_NAME,
     DEFAULT_BUFFER_SIZE,
+    DEFAULT_BYTESIZE,
     DEFAULT_EOS,
+    DEFAULT_FLOW,
     DEFAULT_HOST,
     DEFAULT_KEEPALIVE,
     DEFAULT_LINGER,
     DEFAULT_LINK,
     DEFAULT_MODEL,
     DEFAULT_MQTT_PREFIX,
+    DEFAULT_PARITY,
     DEFAULT_PTY_MODE,
     DEFAULT_SECOND_CLIENT,
     DEFAULT_STATE_RATE,
+    DEFAULT_STOPBITS,
     DEFAULT_TCP_PORT,
     DEFAULT_VIEW,
+    FLOWS,
     LINKS,
     MAX_LINGER,
     MAX_STATE_RATE,
@@ -132,6 +145,42 @@ class PtyEndpoint:
         return str(self.link)
 
 
+@dataclass(frozen=True)
+class SerialEndpoint:
+    """A serial device (``/dev/ttyUSB0``), its line set as the application's port is set:
+    ``baud``, ``bytesize`` data bits, ``parity`` (N, E, O, M, S), ``stopbits`` (1, 1.5, 2),
+    ``flow`` control (none, rtscts, xonxoff); ``pacing``: the board's output no faster than the
+    line carries it (omsd.transport.serial)."""
+
+    path: Path
+    baud: int = DEFAULT_BAUD
+    bytesize: int = DEFAULT_BYTESIZE
+    parity: str = DEFAULT_PARITY
+    stopbits: float = DEFAULT_STOPBITS
+    flow: str = DEFAULT_FLOW
+    pacing: bool = False
+
+    def __str__(self) -> str:
+        """``PATH,BAUD,8N1`` (and ``,rtscts`` or ``,xonxoff``), the ``--serial`` option's
+        syntax."""
+        text = f"{self.path},{self.baud},{self.bytesize}{self.parity}{self.stopbits:g}"
+        return text if self.flow == "none" else f"{text},{self.flow}"
+
+
+@dataclass(frozen=True)
+class Rfc2217Endpoint:
+    """A listening TCP socket for RFC 2217 (telnet COM port control) clients; ``pacing``: the
+    board's output no faster than the line the client set carries it (omsd.transport.rfc2217)."""
+
+    host: str = DEFAULT_HOST
+    port: int = 0
+    pacing: bool = False
+
+    def __str__(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"{host}:{self.port}"
+
+
 def _no_world() -> Mapping[str, AxisWorld]:
     return MappingProxyType({})
 
@@ -151,6 +200,8 @@ class BoardConfig:
     buffer_size: int = DEFAULT_BUFFER_SIZE  # the driver's B:XXXX
     tcp: tuple[TcpEndpoint, ...] = ()
     pty: tuple[PtyEndpoint, ...] = ()
+    serial_port: tuple[SerialEndpoint, ...] = ()
+    rfc2217: tuple[Rfc2217Endpoint, ...] = ()
     second_client: str = DEFAULT_SECOND_CLIENT  # a new TCP client replaces the connected one
     linger: float = DEFAULT_LINGER  # s a half-closed TCP client waits for its answers
     world: Mapping[str, AxisWorld] = field(default_factory=_no_world)  # axis letter -> world
@@ -172,6 +223,8 @@ class BoardConfig:
         # Frozen all the way down, whatever the caller passed.
         object.__setattr__(self, "tcp", tuple(self.tcp))
         object.__setattr__(self, "pty", tuple(self.pty))
+        object.__setattr__(self, "serial_port", tuple(self.serial_port))
+        object.__setattr__(self, "rfc2217", tuple(self.rfc2217))
         object.__setattr__(self, "world", MappingProxyType(dict(self.world)))
         object.__setattr__(self, "inputs", MappingProxyType(dict(self.inputs)))
 
@@ -248,13 +301,18 @@ def from_options(
     eos: str | None,
     log: str | None,
     terminal: bool = False,
+    serial: list[str] | None = None,
+    rfc2217: list[str] | None = None,
 ) -> DaemonConfig:
     """The single-board form of the command line: ``--board MODEL --tcp [HOST:]PORT ...
-    --pty PATH ... --link driver|raw --eos HEX --log FILE``, validated by the schema as the
-    one board of a file would be (paths relative to the working directory). Without --tcp and
-    --pty, the default endpoints; with either, only what is given. ``--terminal`` puts the ptys
-    in terminal mode (TCP stays exact: terminal TCP endpoints are for a configuration file)."""
-    return _single_board(board, tcp, pty, link, eos, log, terminal, "command line")
+    --pty PATH ... --serial PATH[,BAUD[,8N1]] ... --rfc2217 [HOST:]PORT ... --link driver|raw
+    --eos HEX --log FILE``, validated by the schema as the one board of a file would be (paths
+    relative to the working directory). Without --tcp, --pty, --serial and --rfc2217, the
+    default endpoints; with any of them, only what is given. ``--terminal`` puts the ptys in
+    terminal mode (TCP stays exact: terminal TCP endpoints are for a configuration file)."""
+    return _single_board(
+        board, tcp, pty, link, eos, log, terminal, "command line", serial or [], rfc2217 or []
+    )
 
 
 def default_config() -> DaemonConfig:
@@ -271,17 +329,24 @@ def _single_board(
     log: str | None,
     terminal: bool,
     source: str,
+    serial: list[str] | None = None,
+    rfc2217: list[str] | None = None,
 ) -> DaemonConfig:
     # the fast path (omsd.config.fastpath): options that are plainly valid without importing
-    # pydantic; anything else, and every error, from the schema
+    # pydantic (never a serial or RFC 2217 endpoint); anything else, and every error, from the
+    # schema
     from omsd.config import fastpath
 
-    config = fastpath.single_board(board, tcp, pty, link, eos, log, terminal, source)
-    if config is not None:
-        return config
+    serial, rfc2217 = serial or [], rfc2217 or []
+    if not serial and not rfc2217:
+        config = fastpath.single_board(board, tcp, pty, link, eos, log, terminal, source)
+        if config is not None:
+            return config
     from omsd.config import reading
 
-    return reading.single_board(board, tcp, pty, link, eos, log, terminal, source)
+    return reading.single_board(
+        board, tcp, pty, link, eos, log, terminal, source, serial=serial, rfc2217=rfc2217
+    )
 
 
 def _option_path(option: str, text: str) -> Path:
@@ -322,23 +387,31 @@ def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
 
 
 __all__ = [
+    "BAUD_MAX",
+    "BAUD_MIN",
     "BUFFER_SIZE_MAX",
     "BUFFER_SIZE_MIN",
     "CONTROL_SOCKET_NAME",
+    "DEFAULT_BAUD",
     "DEFAULT_BOARD_NAME",
     "DEFAULT_BUFFER_SIZE",
+    "DEFAULT_BYTESIZE",
     "DEFAULT_EOS",
+    "DEFAULT_FLOW",
     "DEFAULT_HOST",
     "DEFAULT_KEEPALIVE",
     "DEFAULT_LINGER",
     "DEFAULT_LINK",
     "DEFAULT_MODEL",
     "DEFAULT_MQTT_PREFIX",
+    "DEFAULT_PARITY",
     "DEFAULT_PTY_MODE",
     "DEFAULT_SECOND_CLIENT",
     "DEFAULT_STATE_RATE",
+    "DEFAULT_STOPBITS",
     "DEFAULT_TCP_PORT",
     "DEFAULT_VIEW",
+    "FLOWS",
     "LINKS",
     "MAX_LINGER",
     "MAX_STATE_RATE",
@@ -353,6 +426,8 @@ __all__ = [
     "LogConfig",
     "MqttConfig",
     "PtyEndpoint",
+    "Rfc2217Endpoint",
+    "SerialEndpoint",
     "TcpEndpoint",
     "default_config",
     "default_pty_link",

@@ -12,6 +12,9 @@ one-line error as before. So the schema stays the one place that says what is va
 mistake is worded; this is a shortcut for the common, valid case only, and it never accepts
 what the schema refuses.
 
+Serial and RFC 2217 endpoints (``--serial``, ``--rfc2217``) never take this path: with either
+option, :func:`omsd.config.from_options` asks the schema directly.
+
 ``tests/test_config_fastpath.py`` holds it to that: for option lists drawn from valid and
 invalid fragments, it returns ``None`` or exactly what the schema makes of them.
 """

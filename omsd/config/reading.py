@@ -65,17 +65,24 @@ def single_board(
     log: str | None,
     terminal: bool,
     source: str,
+    *,
+    serial: Sequence[str] = (),
+    rfc2217: Sequence[str] = (),
 ) -> DaemonConfig:
     """The command line's one board: a document whose keys the options fill, validated as a
-    file would be (paths relative to the working directory). Without --tcp and --pty, the
-    default endpoints (TCP 127.0.0.1:7048 and the default pty link)."""
+    file would be (paths relative to the working directory). Without --tcp, --pty, --serial and
+    --rfc2217, the default endpoints (TCP 127.0.0.1:7048 and the default pty link)."""
     entry: dict[str, Any] = {}
     for key, value in (("model", board), ("link", link), ("eos", eos)):
         if value is not None:
             entry[key] = value
     entry["tcp"] = list(tcp)
     entry["pty"] = list(pty)
-    if not tcp and not pty:
+    if serial:
+        entry["serial_port"] = list(serial)
+    if rfc2217:
+        entry["rfc2217"] = list(rfc2217)
+    if not tcp and not pty and not serial and not rfc2217:
         entry["tcp"] = [f"{DEFAULT_HOST}:{DEFAULT_TCP_PORT}"]
         entry["pty"] = [True]
     if terminal:

@@ -33,6 +33,8 @@ from omsd.config.schema import (
     LogTable,
     MqttTable,
     PtyTable,
+    Rfc2217Table,
+    SerialTable,
     StateTable,
     TcpTable,
 )
@@ -136,6 +138,8 @@ TABLES: tuple[tuple[str, type[Table]], ...] = (
     ("board", BoardTable),
     ("board.tcp", TcpTable),
     ("board.pty", PtyTable),
+    ("board.serial_port", SerialTable),
+    ("board.rfc2217", Rfc2217Table),
     ("board.axes.X", AxisTable),
 )
 
@@ -179,7 +183,7 @@ def reference_rows() -> Iterator[tuple[str, str, str, str]]:
     """Each table and each key: key path, what it takes, its default, what it does."""
     for prefix, table in TABLES:
         header = f"[[{prefix}]]" if prefix == "board" else f"[{prefix}]"
-        if prefix in ("board.tcp", "board.pty"):
+        if prefix in ("board.tcp", "board.pty", "board.serial_port", "board.rfc2217"):
             header = f"{prefix} = {{ ... }}"
         yield f"`{header}`", "a table", "", _cell(table.__doc__ or "")
         for name, info in table.model_fields.items():
@@ -263,6 +267,21 @@ def _board(board: BoardConfig) -> dict[str, Any]:
             entry["group"] = p.group
         pty.append(entry | {"mode": f"{p.mode:04o}", "terminal": p.terminal})
     out["pty"] = pty
+    out["serial_port"] = [
+        {
+            "path": str(p.path),
+            "baud": p.baud,
+            "bytesize": p.bytesize,
+            "parity": p.parity,
+            "stopbits": p.stopbits,
+            "flow": p.flow,
+            "pacing": p.pacing,
+        }
+        for p in board.serial_port
+    ]
+    out["rfc2217"] = [
+        {"address": str(r), "pacing": True} if r.pacing else str(r) for r in board.rfc2217
+    ]
     out["second_client"] = board.second_client
     out["linger"] = board.linger
     out["inputs"] = {str(bit): level for bit, level in sorted(board.inputs.items())}

@@ -28,17 +28,23 @@ from omsd.config import (
     BUFFER_SIZE_MAX,
     BUFFER_SIZE_MIN,
     CONTROL_SOCKET_NAME,
+    DEFAULT_BAUD,
     DEFAULT_BUFFER_SIZE,
+    DEFAULT_BYTESIZE,
     DEFAULT_EOS,
+    DEFAULT_FLOW,
     DEFAULT_KEEPALIVE,
     DEFAULT_LINGER,
     DEFAULT_LINK,
     DEFAULT_MODEL,
     DEFAULT_MQTT_PREFIX,
+    DEFAULT_PARITY,
     DEFAULT_PTY_MODE,
     DEFAULT_SECOND_CLIENT,
     DEFAULT_STATE_RATE,
+    DEFAULT_STOPBITS,
     DEFAULT_VIEW,
+    FLOWS,
     LINKS,
     MAX_LINGER,
     MAX_STATE_RATE,
@@ -52,6 +58,8 @@ from omsd.config import (
     LogConfig,
     MqttConfig,
     PtyEndpoint,
+    Rfc2217Endpoint,
+    SerialEndpoint,
     TcpEndpoint,
     default_pty_link,
 )
@@ -61,12 +69,17 @@ from omsd.config.values import (
     SERIAL_PATTERN,
     TCP_SYNTAX,
     TOPIC_PATTERN,
+    Baud,
     BoardModel,
     CaFile,
+    DataBits,
     FileGroup,
     FilePath,
     Flag,
+    Parity,
+    SerialText,
     Steps,
+    StopBits,
     TcpAddress,
     Text,
     broker_host,
@@ -167,6 +180,59 @@ class PtyTable(Table):
     terminal: Flag = Field(False, description=TcpTable.model_fields["terminal"].description)
 
 
+PACING = (
+    "The board's output no faster than the line carries it: each character one character time"
+    " (start, data, parity and stop bits at the baud rate) after the one before."
+)
+
+
+class SerialTable(Table):
+    """A serial endpoint as a table: `{ path = "/dev/ttyUSB0", baud = 9600, bytesize = 8,
+    parity = "N", stopbits = 1, flow = "none", pacing = false }`."""
+
+    path: Annotated[
+        FilePath, Required("a table with a path (the serial device)", at_table=True)
+    ] = Field(description="The serial device: /dev/ttyUSB0, /dev/ttyS0, a /dev/serial/by-id link.")
+    baud: Baud = Field(DEFAULT_BAUD, description="The line's baud rate.")
+    bytesize: DataBits = Field(DEFAULT_BYTESIZE, description="Data bits.")
+    parity: Parity = Field(DEFAULT_PARITY, description="Parity: none, even, odd, mark or space.")
+    stopbits: StopBits = Field(DEFAULT_STOPBITS, description="Stop bits.")
+    flow: Annotated[str, choice(FLOWS)] = Field(
+        DEFAULT_FLOW,
+        description="Flow control: none, rtscts (hardware) or xonxoff (software), as the"
+        " application's port is set.",
+    )
+    pacing: Flag = Field(
+        False,
+        description=PACING + " A real UART paces by itself; this is for devices that do not.",
+    )
+
+    def endpoint(self) -> SerialEndpoint:
+        return SerialEndpoint(
+            self.path,
+            self.baud,
+            self.bytesize,
+            self.parity,
+            self.stopbits,
+            self.flow,
+            self.pacing,
+        )
+
+
+class Rfc2217Table(Table):
+    """An RFC 2217 endpoint as a table: `{ address = "127.0.0.1:7148", pacing = true }`."""
+
+    address: Annotated[
+        TcpAddress, Required(f"a table with an address ({TCP_SYNTAX})", at_table=True)
+    ] = Field(description="[HOST:]PORT or PORT, as `tcp` takes it.")
+    pacing: Flag = Field(
+        False, description=PACING + " The line is the one the client set (9600 8N1 until then)."
+    )
+
+    def endpoint(self) -> Rfc2217Endpoint:
+        return Rfc2217Endpoint(self.address.host, self.address.port, self.pacing)
+
+
 TcpEntry = Annotated[
     Annotated[TcpAddress, Tag("<address>")] | Annotated[TcpTable, Tag("<table>")],
     Discriminator(_tcp_kind),
@@ -179,6 +245,22 @@ PtyEntry = Annotated[
     | Annotated[FilePath, Tag("<path>")],
     Discriminator(_pty_kind),
     Says(PTY_WORDS, holds_tables=True),
+]
+
+
+SERIAL_WORDS = (
+    "a device path with its line (PATH[,BAUD[,8N1]]), a table {path, baud, bytesize, parity,"
+    " stopbits, flow, pacing}, or a list of them"
+)
+SerialEntry = Annotated[
+    Annotated[SerialText, Tag("<address>")] | Annotated[SerialTable, Tag("<table>")],
+    Discriminator(_tcp_kind),
+    Says(SERIAL_WORDS, holds_tables=True),
+]
+Rfc2217Entry = Annotated[
+    Annotated[TcpAddress, Tag("<address>")] | Annotated[Rfc2217Table, Tag("<table>")],
+    Discriminator(_tcp_kind),
+    Says(TCP_SYNTAX, holds_tables=True),
 ]
 
 
@@ -355,6 +437,33 @@ class BoardTable(Table):
         description="Pseudo-terminals, each reached through a symlink omsd creates and removes;"
         " the default link is $XDG_RUNTIME_DIR/omsd/NAME (or /tmp/omsd-UID/NAME).",
     )
+    serial_port: Annotated[
+        Annotated[SerialEntry, Tag("<one>")] | Annotated[list[SerialEntry], Tag("<list>")],
+        Discriminator(_one_or_list),
+        Says(SERIAL_WORDS, holds_tables=True),
+        Default("none"),
+        Option("--serial"),
+    ] = Field(
+        [],
+        description="Serial devices (a USB adapter, /dev/ttyS0) the board is served on, each"
+        " set as the legacy application's port is: 9600 baud 8N1, no flow control unless"
+        " given. A device that goes away is opened again when it comes back.",
+    )
+    rfc2217: Annotated[
+        Annotated[Rfc2217Entry, Tag("<one>")] | Annotated[list[Rfc2217Entry], Tag("<list>")],
+        Discriminator(_one_or_list),
+        Says(
+            '"[HOST:]PORT" (no HOST: 127.0.0.1), PORT, a table {address, pacing}, or a list of'
+            " them",
+            holds_tables=True,
+        ),
+        Default("none"),
+        Option("--rfc2217"),
+    ] = Field(
+        [],
+        description="RFC 2217 (telnet COM port control) listening sockets: pyserial's"
+        " rfc2217:// and other clients set the line, DTR, RTS and breaks (logged).",
+    )
     second_client: Annotated[str, choice(SECOND_CLIENT_POLICIES)] = Field(
         DEFAULT_SECOND_CLIENT,
         description="A second TCP client: takeover (it replaces the connected one) or refuse"
@@ -435,8 +544,15 @@ class BoardTable(Table):
             for key, name in (("eos", "eos"), ("buffer", "buffer_size")):
                 if name in given:
                     raise problem(detail=RAW_FRAMING, at=(key,))
-        if not self.tcp_endpoints() and not self.pty_entries():
-            raise problem(detail="expected at least one endpoint (tcp or pty), got none")
+        if not (
+            self.tcp_endpoints()
+            or self.pty_entries()
+            or self.serial_endpoints()
+            or self.rfc2217_endpoints()
+        ):
+            raise problem(
+                detail="expected at least one endpoint (tcp, pty, serial_port or rfc2217), got none"
+            )
         self.personality()
         return self
 
@@ -525,6 +641,29 @@ class BoardTable(Table):
             found.append((endpoint, at))
         return found
 
+    def serial_endpoints(self) -> list[tuple[SerialEndpoint, KeyPath]]:
+        """Each serial endpoint with its key path in the board."""
+        entries = self.serial_port if isinstance(self.serial_port, list) else [self.serial_port]
+        return [
+            (
+                entry.endpoint() if isinstance(entry, SerialTable) else entry,
+                ("serial_port", i) if isinstance(self.serial_port, list) else ("serial_port",),
+            )
+            for i, entry in enumerate(entries)
+        ]
+
+    def rfc2217_endpoints(self) -> list[tuple[Rfc2217Endpoint, KeyPath]]:
+        """Each RFC 2217 endpoint with its key path in the board."""
+        entries = self.rfc2217 if isinstance(self.rfc2217, list) else [self.rfc2217]
+        found = []
+        for i, entry in enumerate(entries):
+            at: KeyPath = ("rfc2217", i) if isinstance(self.rfc2217, list) else ("rfc2217",)
+            if isinstance(entry, Rfc2217Table):
+                found.append((entry.endpoint(), at))
+            else:
+                found.append((Rfc2217Endpoint(entry.host, entry.port), at))
+        return found
+
     def config(self, name: str) -> BoardConfig:
         model = self.personality()
         return BoardConfig(
@@ -535,6 +674,8 @@ class BoardTable(Table):
             buffer_size=self.buffer_size,
             tcp=tuple(t for t, _ in self.tcp_endpoints()),
             pty=tuple(p for p, _ in self.pty_endpoints(name)),
+            serial_port=tuple(p for p, _ in self.serial_endpoints()),
+            rfc2217=tuple(r for r, _ in self.rfc2217_endpoints()),
             second_client=self.second_client,
             linger=self.linger,
             world={key.upper(): axis.world() for key, axis in self.axes.items()},
@@ -553,7 +694,10 @@ def _board_rules(schema: dict[str, Any]) -> None:
     nonempty = {"not": {"type": "array", "maxItems": 0}}
     schema["allOf"] = [
         {
-            "anyOf": [{"required": [key], "properties": {key: nonempty}} for key in ("tcp", "pty")],
+            "anyOf": [
+                {"required": [key], "properties": {key: nonempty}}
+                for key in ("tcp", "pty", "serial_port", "rfc2217")
+            ],
         },
         {
             "if": {"required": ["link"], "properties": {"link": {"pattern": "^[Rr][Aa][Ww]$"}}},
@@ -745,6 +889,7 @@ class Document(Table):
         # so 1,000 boards on port 0 take no check, not half a million
         tcps: dict[int, list[tuple[TcpEndpoint, KeyPath]]] = {}
         ptys: dict[Path, KeyPath] = {}
+        serials: dict[Path, KeyPath] = {}
         for i, (name, board) in enumerate(self.named_boards()):
             at: KeyPath = ("board", i)
             if name in names:
@@ -754,7 +899,11 @@ class Document(Table):
                     also=names[name],
                 )
             names[name] = (*at, "name")
-            for endpoint, where in board.tcp_endpoints():
+            listening = [
+                *board.tcp_endpoints(),
+                *((TcpEndpoint(r.host, r.port), at) for r, at in board.rfc2217_endpoints()),
+            ]
+            for endpoint, where in listening:
                 if endpoint.port == 0:
                     continue
                 same_port = tcps.setdefault(endpoint.port, [])
@@ -766,6 +915,12 @@ class Document(Table):
                 if pty.link in ptys:
                     raise _duplicate((*at, *where), ptys[pty.link], "a link", str(pty.link))
                 ptys[pty.link] = (*at, *where)
+            for serial, where in board.serial_endpoints():
+                if serial.path in serials:
+                    raise _duplicate(
+                        (*at, *where), serials[serial.path], "a device", str(serial.path)
+                    )
+                serials[serial.path] = (*at, *where)
         return self
 
     def named_boards(self) -> list[tuple[str, BoardTable]]:
@@ -824,6 +979,8 @@ __all__ = [
     "LogTable",
     "MqttTable",
     "PtyTable",
+    "Rfc2217Table",
+    "SerialTable",
     "StateTable",
     "TcpTable",
     "not_the_log_problem",

@@ -1,5 +1,6 @@
 """The values of the configuration that have a syntax of their own, without pydantic: TCP
-addresses, the driver's hexadecimal options, paths, and when two endpoints collide.
+addresses, serial devices with their line (``PATH[,BAUD[,8N1]]``), the driver's hexadecimal
+options, paths, and when two endpoints collide.
 
 One definition each, used twice: :mod:`omsd.config.values` makes the schema's types of them
 (pydantic, with omsd's words for every error), and :mod:`omsd.config.fastpath` reads a valid
@@ -14,15 +15,18 @@ import ipaddress
 import os
 import re
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
-from omsd.config import TcpEndpoint
-from omsd.defaults import DEFAULT_HOST
+from omsd.config import SerialEndpoint, TcpEndpoint
+from omsd.defaults import BAUD_MAX, BAUD_MIN, DEFAULT_HOST
 
 PATH_PATTERN = r"^[^\x00]*[^\x00\s][^\x00]*$"  # not empty or blank, no NUL
 TCP_PATTERN = r"^(?:(?:\[[^\]]*\]|[^:\[\]]*):)?[0-9]{1,5}$"
 TCP_SYNTAX = "[HOST:]PORT with PORT 0..65535"
 _TCP = re.compile(r"(?:(?:\[(?P<v6>[^\]]*)\]|(?P<host>[^:\[\]]*)):)?(?P<port>[0-9]{1,5})")
+SERIAL_SYNTAX = "PATH[,BAUD[,8N1]]"
+_FRAME = re.compile(r"(?P<bytesize>[5-8])(?P<parity>[NEOMSneoms])(?P<stopbits>1|1\.5|2)")
 HOSTNAME = re.compile(r"[A-Za-z0-9_]([A-Za-z0-9_-]*[A-Za-z0-9_])?(\.[A-Za-z0-9_-]+)*")
 
 
@@ -91,6 +95,43 @@ def tcp_address(raw: int | str) -> TcpEndpoint:
     return TcpEndpoint(host, port)
 
 
+def serial_text(text: str, base: Path) -> SerialEndpoint:
+    """``PATH``, ``PATH,BAUD`` or ``PATH,BAUD,8N1`` (data bits 5-8, parity N E O M S, stop bits
+    1, 1.5 or 2), and ``,rtscts`` or ``,xonxoff`` after it for flow control (as the daemon
+    announces a port that has it), the path relative to ``base``; an :class:`AddressProblem`
+    with the words for what it should have been."""
+    path, *settings = text.split(",")
+    if not path.strip() or "\x00" in path or len(settings) > 3:
+        raise AddressProblem(f"{SERIAL_SYNTAX} (a device path, a baud rate, 8N1)")
+    endpoint = SerialEndpoint(resolve(path, base))
+    if settings:
+        baud = settings[0].strip()
+        if not baud.isdigit() or not BAUD_MIN <= int(baud) <= BAUD_MAX:
+            raise AddressProblem(f"{SERIAL_SYNTAX} with BAUD {BAUD_MIN}..{BAUD_MAX}")
+        endpoint = SerialEndpoint(endpoint.path, int(baud))
+    if len(settings) >= 2:
+        m = _FRAME.fullmatch(settings[1].strip())
+        if m is None:
+            raise AddressProblem(
+                f"{SERIAL_SYNTAX} with data bits 5..8, parity N, E, O, M or S and stop bits 1,"
+                " 1.5 or 2 (8N1)"
+            )
+        stop = float(m.group("stopbits"))
+        endpoint = SerialEndpoint(
+            endpoint.path,
+            endpoint.baud,
+            int(m.group("bytesize")),
+            m.group("parity").upper(),
+            int(stop) if stop.is_integer() else stop,
+        )
+    if len(settings) == 3:  # what the daemon announces after 8N1 when the port has flow control
+        flow = settings[2].strip().lower()
+        if flow not in ("rtscts", "xonxoff"):
+            raise AddressProblem(f"{SERIAL_SYNTAX} and rtscts or xonxoff after the 8N1")
+        endpoint = replace(endpoint, flow=flow)
+    return endpoint
+
+
 def _family(host: str) -> int | None:
     try:
         return ipaddress.ip_address(host.split("%")[0]).version
@@ -115,12 +156,14 @@ def tcp_conflict(a: TcpEndpoint, b: TcpEndpoint) -> bool:
 __all__ = [
     "HOSTNAME",
     "PATH_PATTERN",
+    "SERIAL_SYNTAX",
     "TCP_PATTERN",
     "TCP_SYNTAX",
     "AddressProblem",
     "hex_pattern",
     "hex_value",
     "resolve",
+    "serial_text",
     "tcp_address",
     "tcp_conflict",
 ]

@@ -1,6 +1,7 @@
 """The values of omsd's configuration that are more than a TOML type: paths relative to the
-file, TCP addresses, the driver's hex options, permissions, board models, groups, the MQTT
-broker; each a type of :mod:`omsd.config.schema`'s keys with its words (:class:`Says`)."""
+file, TCP addresses, serial devices and their lines, the driver's hex options, permissions,
+board models, groups, the MQTT broker; each a type of :mod:`omsd.config.schema`'s keys with its
+words (:class:`Says`)."""
 
 import grp
 import ipaddress
@@ -11,16 +12,18 @@ from typing import Annotated
 
 from pydantic import Field, ValidationInfo
 
-from omsd.config import TcpEndpoint
+from omsd.config import BAUD_MAX, BAUD_MIN, SerialEndpoint, TcpEndpoint
 from omsd.config.syntax import (
     HOSTNAME,
     PATH_PATTERN,
+    SERIAL_SYNTAX,
     TCP_PATTERN,
     TCP_SYNTAX,
     AddressProblem,
     hex_pattern,
     hex_value,
     resolve,
+    serial_text,
     tcp_address,
     tcp_conflict,
 )
@@ -83,6 +86,31 @@ def _tcp_address(raw: int | str) -> TcpEndpoint:
         raise problem(expected=exc.expected) from None
 
 
+# serial devices (omsd.config.syntax) -------------------------------------------------------------
+
+
+def _serial_text(raw: str, info: ValidationInfo) -> SerialEndpoint:
+    """``PATH[,BAUD[,8N1]]`` (:func:`omsd.config.syntax.serial_text`), relative to the file."""
+    try:
+        return serial_text(raw, _context(info))
+    except AddressProblem as exc:
+        raise problem(expected=exc.expected) from None
+
+
+PARITY_WORDS = {"none": "N", "even": "E", "odd": "O", "mark": "M", "space": "S"}
+
+
+def _parity(raw: str) -> str:
+    text = raw.strip().lower()
+    return PARITY_WORDS.get(text, text.upper())
+
+
+def _stopbits(raw: float) -> float:
+    if raw not in (1, 1.5, 2):
+        raise ValueError(raw)
+    return int(raw) if float(raw).is_integer() else raw
+
+
 def _is_address(host: str) -> bool:
     try:
         ipaddress.ip_address(host)
@@ -142,6 +170,40 @@ TcpAddress = Annotated[
         convert=_tcp_address,
     ),
 ]
+SerialText = Annotated[
+    SerialEndpoint,
+    Says(
+        f"{SERIAL_SYNTAX} (a device path, a baud rate, 8N1)",
+        accepts=Annotated[str, Field(pattern=PATH_PATTERN)],
+        convert=_serial_text,
+        with_info=True,
+    ),
+]
+Baud = Annotated[
+    int,
+    Says(
+        f"a baud rate {BAUD_MIN}..{BAUD_MAX}",
+        accepts=Annotated[int, Field(ge=BAUD_MIN, le=BAUD_MAX)],
+    ),
+]
+DataBits = Annotated[int, Says("data bits 5..8", accepts=Annotated[int, Field(ge=5, le=8)])]
+Parity = Annotated[
+    str,
+    Says(
+        '"N", "E", "O", "M" or "S" (or none, even, odd, mark, space)',
+        accepts=Annotated[str, Field(pattern=r"^\s*(?i:[NEOMS]|none|even|odd|mark|space)\s*$")],
+        convert=_parity,
+    ),
+]
+StopBits = Annotated[
+    float,
+    Says(
+        "stop bits 1, 1.5 or 2",
+        accepts=Annotated[float, Field(allow_inf_nan=False)],
+        convert=_stopbits,
+        json={"enum": [1, 1.5, 2]},
+    ),
+]
 Steps = Annotated[
     float,
     Says(
@@ -165,12 +227,17 @@ BoardModel = Annotated[
 
 __all__ = [
     "TCP_SYNTAX",
+    "Baud",
     "BoardModel",
     "CaFile",
+    "DataBits",
     "FileGroup",
     "FilePath",
     "Flag",
+    "Parity",
+    "SerialText",
     "Steps",
+    "StopBits",
     "TcpAddress",
     "Text",
     "broker_host",

@@ -11,17 +11,26 @@
 
 Every method raises :class:`~omsd.control.protocol.ControlError` (one line) when the daemon
 refuses the operation, and :class:`OSError` when it cannot be reached.
+
+:meth:`Control.subscribe` makes the connection a stream of the boards' life (the snapshot, then
+what changes, at most ``rate`` times a second, and the events as they happen): a
+:class:`Subscription`, iterated for its messages, which keeps each board's state up to date.
+Until it is closed the connection is the stream's; use another :class:`Control` for the
+operations meanwhile.
 """
 
 from __future__ import annotations
 
 import itertools
+import select
 import socket
+import time
+from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from omsd.control.protocol import MAX_LINE, ControlError, decode, encode
+from omsd.control.protocol import DEFAULT_RATE, MAX_LINE, ControlError, decode, encode, merge
 from omsd.defaults import default_pty_link
 
 _UNSET: Any = object()
@@ -98,13 +107,51 @@ class Control:
         while (end := self._buffer.find(b"\n")) < 0:
             if len(self._buffer) > MAX_LINE:
                 raise ControlError("reply too long")
-            data = self.sock.recv(65536)
-            if not data:
-                raise ConnectionError(f"the daemon at {self.address} closed the connection")
-            self._buffer += data
+            self._receive()
         line = bytes(self._buffer[:end])
         del self._buffer[: end + 1]
         return line
+
+    def _receive(self) -> None:
+        data = self.sock.recv(65536)
+        if not data:
+            raise ConnectionError(f"the daemon at {self.address} closed the connection")
+        self._buffer += data
+
+    # -- the stream -----------------------------------------------------------------------------
+
+    def subscribe(
+        self,
+        board: str | None = None,
+        *,
+        boards: list[str] | None = None,
+        rate: float = DEFAULT_RATE,
+        traffic: bool | str = False,
+        timeout: float | None = None,
+    ) -> Subscription:
+        """The boards' life as a stream (every board unless ``board`` or ``boards`` says): the
+        snapshot (:attr:`Subscription.snapshot`), then, iterating, each message: ``state``
+        changes at most ``rate`` times a second, ``event`` as they happen, ``traffic`` chunks
+        with ``traffic`` true (or a board's name). ``timeout``: seconds an iteration waits for a
+        message before :class:`TimeoutError` (None: as long as it takes; an idle daemon sends
+        nothing)."""
+        ident = next(self._ids)
+        request: dict[str, Any] = {"id": ident, "op": "subscribe", "rate": rate}
+        if boards is not None:
+            request["boards"] = boards
+        elif board is not None:
+            request["board"] = board
+        if traffic is not False:
+            request["traffic"] = traffic
+        self.sock.settimeout(self.timeout)
+        self.sock.sendall(encode(request))
+        while True:
+            reply = decode(self._line())
+            if reply.get("id") != ident:
+                continue
+            if not reply.get("ok"):
+                raise ControlError(str(reply.get("error", "error")))
+            return Subscription(self, ident, reply["result"], timeout)
 
     # -- looking --------------------------------------------------------------------------------
 
@@ -243,4 +290,98 @@ class Control:
         return self._wait(board, timeout, until="position", axis=axis, position=position)
 
 
-__all__ = ["Control", "ControlError", "default_socket"]
+class Subscription:
+    """A stream from :meth:`Control.subscribe`. ``snapshot`` is its first message; ``states``
+    is each board's state (the snapshot's) with every ``state`` message read so far merged
+    in (:func:`omsd.control.protocol.merge`). Iterating gives the messages as they come; a
+    program with other things to wait on (``omsd top``) waits on :meth:`fileno` and takes what
+    has come with :meth:`pending`."""
+
+    def __init__(
+        self, control: Control, ident: int, snapshot: dict[str, Any], timeout: float | None
+    ) -> None:
+        self.control = control
+        self.ident = ident
+        self.snapshot = snapshot
+        self.timeout = timeout
+        self.states: dict[str, dict[str, Any]] = {b["name"]: b["state"] for b in snapshot["boards"]}
+        self.closed = False
+
+    def __iter__(self) -> Iterator[dict[str, Any]]:
+        return self
+
+    def __next__(self) -> dict[str, Any]:
+        message = self.read(self.timeout)
+        if message is None:
+            raise TimeoutError(f"no message from the daemon in {self.timeout:g} s")
+        return message
+
+    def fileno(self) -> int:
+        return self.control.sock.fileno()
+
+    def read(self, timeout: float | None = None) -> dict[str, Any] | None:
+        """The next message, or None when none came within ``timeout`` seconds (None: wait as
+        long as it takes)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            message = self._buffered()
+            if message is not None:
+                return message
+            left = None if deadline is None else max(0.0, deadline - time.monotonic())
+            ready, _, _ = select.select([self.fileno()], [], [], left)
+            if not ready:
+                return None
+            self.control._receive()
+
+    def pending(self) -> list[dict[str, Any]]:
+        """The messages that have come, without waiting."""
+        out: list[dict[str, Any]] = []
+        while True:
+            message = self._buffered()
+            if message is None:
+                ready, _, _ = select.select([self.fileno()], [], [], 0.0)
+                if not ready:
+                    return out
+                self.control._receive()
+                continue
+            out.append(message)
+
+    def _buffered(self) -> dict[str, Any] | None:
+        """The next whole message already received, if any (replies to other requests are
+        skipped)."""
+        buffer = self.control._buffer
+        while (end := buffer.find(b"\n")) >= 0:
+            line = bytes(buffer[:end])
+            del buffer[: end + 1]
+            message = decode(line)
+            if message.get("id") != self.ident or "kind" not in message:
+                continue
+            if message["kind"] == "state":
+                for name, changes in message.get("boards", {}).items():
+                    if name in self.states:
+                        merge(self.states[name], changes)
+            return message
+        if len(buffer) > MAX_LINE:
+            raise ControlError("message too long")
+        return None
+
+    def close(self) -> dict[str, Any] | None:
+        """Unsubscribe: the connection takes operations again. Returns what the daemon counted
+        (``sent``, ``dropped`` by kind, ``peak``), or None if the connection is gone."""
+        if self.closed:
+            return None
+        self.closed = True
+        try:
+            result: dict[str, Any] = self.control.call("unsubscribe")
+        except (OSError, ControlError):
+            return None
+        return result
+
+    def __enter__(self) -> Subscription:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+__all__ = ["Control", "ControlError", "Subscription", "default_socket"]

@@ -27,6 +27,36 @@ reset      board (a power cycle)
 wait       board, until: done / idle / position, axis, position (with until         the state
            position), timeout (seconds of real time, default 10)
 ========== ========================================================================= =========
+
+Streams (:mod:`omsd.control.watch`): ``subscribe`` turns the connection into a stream of the
+boards' life. Its arguments: ``boards`` (a list of names; default every board; ``board`` names
+one), ``rate`` (state messages a second at most, above 0 and at most :data:`MAX_RATE`, default
+:data:`DEFAULT_RATE`), ``traffic`` (false: byte counts only; true: every chunk of traffic of
+the boards too; a board's name: that board's chunks). Its reply's ``result`` is the snapshot,
+``{"kind": "snapshot", "t": ..., "rate": 10.0, "traffic": false, "boards": [{"name", "model",
+"link", "endpoints", "travel", "state"}, ...]}`` (``state`` as the ``state`` op gives it;
+``travel``: the limit switches' positions the configuration gives, per axis). Then, each
+carrying the subscribe's ``id``:
+
+* ``{"id": 1, "kind": "state", "t": ..., "boards": {"xy": {"time": ..., "axes": {"X":
+  {"position": 1200, "velocity": 5000.0, ...}}, ...}}, "traffic": {"xy": {"in": 120, "out":
+  80}}, "dropped": {...}}``: what changed since the last one, at most ``rate`` a second, and
+  none while nothing changes. Per board its ``time`` and the fields that changed (whole), and
+  in ``axes`` per axis the fields that changed (:func:`merge` applies them to the snapshot's
+  state); ``traffic``: bytes in and out since the subscription began, for the boards whose
+  counts changed; ``dropped`` (only once something was): messages dropped because the client
+  read too slowly, by kind (``event``, ``traffic``), and state messages merged into a later one
+  (``state``).
+* ``{"id": 1, "kind": "event", "event": {"seq": 1, "board": "xy", "kind": "done", ...}}``: an
+  event as it happens (the MQTT bridge's event object; ``seq`` counts the board's events from 1
+  for this subscription: a gap means some were dropped).
+* ``{"id": 1, "kind": "traffic", "traffic": {"t": ..., "kind": "traffic", "board": "xy",
+  "endpoint": ..., "dir": "in", "data": ..., "hex": ..., "seq": 4}}``: a chunk of traffic (with
+  ``traffic`` on), the traffic log's object.
+
+``unsubscribe`` ends the stream (its reply comes after the last stream message; ``result``:
+``{"sent": N, "dropped": {...}}``); the connection then takes requests and answers them as
+before. Requests sent during a stream are answered too, their replies among its messages.
 """
 
 from __future__ import annotations
@@ -35,6 +65,8 @@ import json
 from typing import Any
 
 MAX_LINE = 64 * 1024  # a request longer than this is refused (and the connection closed)
+DEFAULT_RATE = 10.0  # state messages a second of a subscription, at most, unless told
+MAX_RATE = 50.0
 
 OPS = (
     "boards",
@@ -50,6 +82,9 @@ OPS = (
     "reset",
     "wait",
 )
+
+STREAM_OPS = ("subscribe", "unsubscribe")
+"""Operations of a control connection itself (not run over MQTT): a stream of the boards."""
 
 
 class ControlError(Exception):
@@ -68,3 +103,17 @@ def decode(line: bytes) -> dict[str, Any]:
     if not isinstance(message, dict):
         raise ControlError("not a JSON object")
     return message
+
+
+def merge(state: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    """Apply one board's changes from a ``state`` message to that board's state (the snapshot's,
+    kept up to date): fields replaced whole, but ``axes`` merged axis by axis, field by field.
+    Returns ``state``."""
+    for key, value in changes.items():
+        if key == "axes":
+            axes = state.setdefault("axes", {})
+            for letter, fields in value.items():
+                axes.setdefault(letter, {}).update(fields)
+        else:
+            state[key] = value
+    return state

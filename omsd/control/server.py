@@ -4,7 +4,9 @@ It listens on a Unix socket, owner-only (mode 0600 in a directory it creates 070
 only if configured. Each request runs as its own task, so a ``wait`` does not hold up the
 connection's other requests; a bad request gets a one-line error and the connection stays.
 Everything an operation does to a board goes through the board's world API and the service, at
-the board's own time (which the ``time`` operation may have paused or scaled).
+the board's own time (which the ``time`` operation may have paused or scaled). ``subscribe``
+makes the connection a stream of the boards' life as well (:mod:`omsd.control.watch`), until
+``unsubscribe`` or the connection ends.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from omsd.board.events import Event
-from omsd.control.protocol import MAX_LINE, OPS, ControlError, decode, encode
+from omsd.control.protocol import MAX_LINE, OPS, STREAM_OPS, ControlError, decode, encode
+from omsd.control.watch import Subscription, options
 from omsd.faults import Faults
 from omsd.files import group_id
 from omsd.service import BoardService
@@ -50,6 +53,7 @@ class ControlServer:
         self.paths: list[Path] = []
         self._tasks: set[asyncio.Task[None]] = set()
         self._writers: set[asyncio.StreamWriter] = set()
+        self.subscriptions: dict[asyncio.StreamWriter, Subscription] = {}
 
     # -- listening ------------------------------------------------------------------------------
 
@@ -85,6 +89,9 @@ class ControlServer:
     async def close(self) -> None:
         for server in self.servers:
             server.close()
+        for subscription in self.subscriptions.values():
+            subscription.close_now()
+        self.subscriptions.clear()
         for writer in list(self._writers):
             writer.close()
         for task in list(self._tasks):
@@ -123,20 +130,54 @@ class ControlServer:
                 task.add_done_callback(self._tasks.discard)
         finally:
             self._writers.discard(writer)
+            subscription = self.subscriptions.pop(writer, None)
+            if subscription is not None:
+                subscription.close_now()  # its sender ends at its next turn
             writer.close()
 
     async def _request(self, line: bytes, writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
         ident: object = None
+        subscription = None
         try:
             message = decode(line)
             ident = message.get("id")
-            result = await self.run(message)
+            op = message.get("op")
+            if op == "subscribe":
+                subscription, result = self._subscribe(message, writer)
+            elif op == "unsubscribe":
+                result = await self._unsubscribe(writer)
+            else:
+                result = await self.run(message)
             reply: dict[str, Any] = {"id": ident, "ok": True, "result": result}
         except ControlError as exc:
             reply = {"id": ident, "ok": False, "error": str(exc)}
         except (TypeError, ValueError, KeyError) as exc:
             reply = {"id": ident, "ok": False, "error": f"bad request: {exc}"}
         await self._send(writer, lock, reply)
+        if subscription is not None:
+            subscription.start(writer, lock)  # the stream follows its snapshot
+
+    def _subscribe(
+        self, message: dict[str, Any], writer: asyncio.StreamWriter
+    ) -> tuple[Subscription, dict[str, Any]]:
+        """A subscription for this connection, and its snapshot."""
+        if writer in self.subscriptions:
+            raise ControlError("this connection has a subscription already (unsubscribe first)")
+        names, rate, traffic = options(message, list(self.services))
+        services = [self.services[name] for name in names]
+        subscription = Subscription(
+            message.get("id"), services, self._state, self.log, rate=rate, traffic=traffic
+        )
+        self.subscriptions[writer] = subscription
+        return subscription, subscription.snapshot(
+            [b for b in self._boards() if b["name"] in names]
+        )
+
+    async def _unsubscribe(self, writer: asyncio.StreamWriter) -> dict[str, Any]:
+        subscription = self.subscriptions.pop(writer, None)
+        if subscription is None:
+            raise ControlError("this connection has no subscription")
+        return await subscription.close()
 
     async def _send(
         self, writer: asyncio.StreamWriter, lock: asyncio.Lock, reply: dict[str, Any]
@@ -154,8 +195,10 @@ class ControlServer:
 
     async def run(self, message: dict[str, Any]) -> Any:
         op = message.get("op")
+        if op in STREAM_OPS:
+            raise ControlError(f"{op} is for a connection to the control socket only")
         if op not in OPS:
-            raise ControlError(f"unknown op {op!r}; known: {', '.join(OPS)}")
+            raise ControlError(f"unknown op {op!r}; known: {', '.join((*OPS, *STREAM_OPS))}")
         if op == "boards":
             return self._boards()
         service = self._service(message)

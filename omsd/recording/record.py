@@ -238,24 +238,16 @@ class Recorder:
             sock.setblocking(False)
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             return Port(loop, sock.fileno(), self._from_card, self._card_gone, sock.close)
+        from omsd.pacing import Line as SerialLine
+        from omsd.transport.serial import open_device
+
+        line = SerialLine(card.baud, card.bytesize, card.parity, card.stopbits)
         try:
-            import serial  # type: ignore[import-untyped]
-        except ImportError:
-            raise StartError("--to: serial ports need pyserial: pip install pyserial") from None
-        try:
-            port = serial.Serial(
-                port=card.path,
-                baudrate=card.baud,
-                bytesize=card.bytesize,
-                parity=card.parity,
-                stopbits=card.stopbits,
-                timeout=None,  # VMIN 1: a read of nothing is the device's hang-up, not "no data"
-                exclusive=True,
-            )
+            # locked against other openers, VMIN 1 (a read of nothing is a hang-up), non-blocking
+            port = open_device(card.path, line)
         except (OSError, ValueError) as exc:
             raise StartError(f"--to: cannot open the card on {card}: {exc}") from None
         fd = port.fileno()
-        os.set_blocking(fd, False)
         return Port(loop, fd, self._from_card, self._card_gone, port.close)
 
     def _open_endpoint(self) -> str:

@@ -23,11 +23,12 @@ import json
 import math
 import time
 from json.encoder import encode_basestring_ascii
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from rich.console import Console
-from rich.style import Style
-from rich.text import Text
+if TYPE_CHECKING:  # rich is imported by the rich view only (issue 16: start-up)
+    from rich.console import Console
+    from rich.style import StyleType
+    from rich.text import Text
 
 _NAMED = {0x0A: "<LF>", 0x0D: "<CR>"}
 
@@ -163,14 +164,16 @@ class RichStyles:
 
     def __init__(self, console: Console) -> None:
         self.console = console
-        self._codes: dict[Style, tuple[str, str]] = {}
+        self._codes: dict[StyleType, tuple[str, str]] = {}
 
-    def wrap(self, text: str, style: Style) -> str:
+    def wrap(self, text: str, style: StyleType) -> str:
         """``text`` in ``style``, as the console writes it."""
         if not text:
             return ""
         codes = self._codes.get(style)
         if codes is None:
+            from rich.text import Text
+
             with self.console.capture() as capture:
                 self.console.print(Text(self._MARK, style), end="")
             before, _, after = capture.get().partition(self._MARK)

@@ -95,10 +95,6 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any, TextIO
 
-from rich.console import Console
-from rich.style import Style
-from rich.text import Text
-
 from omsd.files import open_log
 from omsd.telemetry.lines import (
     RichStyles,
@@ -200,14 +196,16 @@ def _isatty(stream: TextIO) -> bool:
         return False
 
 
-_TIME = Style(dim=True)
-_BOARD = Style(color="cyan", bold=True)
-_ENDPOINT = Style(color="blue")
-_ARROW = {Direction.IN: Style(color="yellow", bold=True), Direction.OUT: Style(color="green")}
-_DATA = {Direction.IN: Style(color="yellow"), Direction.OUT: Style(color="green")}
-_CONTROL = Style(color="magenta")
-_EVENT = Style(color="magenta", bold=True)
-_LEVEL = {"info": Style(), "warning": Style(color="yellow"), "error": Style(color="red", bold=True)}
+# The rich view's styles, in rich's style syntax: rich is imported only when the view is rich,
+# not for a daemon whose traffic goes to a file, the journal or nowhere (issue 16: start-up)
+_TIME = "dim"
+_BOARD = "bold cyan"
+_ENDPOINT = "blue"
+_ARROW = {Direction.IN: "bold yellow", Direction.OUT: "green"}
+_DATA = {Direction.IN: "yellow", Direction.OUT: "green"}
+_CONTROL = "magenta"
+_EVENT = "bold magenta"
+_LEVEL = {"info": "none", "warning": "yellow", "error": "bold red"}
 
 
 class TrafficLog:
@@ -255,6 +253,8 @@ class TrafficLog:
         self.group = group
         self._styles: RichStyles | None = None
         if view == "rich":
+            from rich.console import Console
+
             console = Console(
                 file=self._stream,
                 soft_wrap=True,
@@ -443,6 +443,8 @@ class TrafficLog:
         elif entry[4]:
             _, t, level, message, _ = entry
             label = "" if level == "info" else f"{level}: "
+            from rich.text import Text
+
             for line in message.splitlines() or [""]:
                 text = Text()
                 text.append(clock_text(t), _TIME)

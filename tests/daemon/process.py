@@ -70,24 +70,24 @@ class Endpoint:
     board: str
     model: str
     link: str
-    kind: str  # "tcp" or "pty"
-    address: str  # "127.0.0.1:40123" or "/path/link -> /dev/pts/7"
+    kind: str  # "tcp", "pty", "serial" or "rfc2217"
+    address: str  # "127.0.0.1:40123", "/path/link -> /dev/pts/7", "/dev/ttyUSB0,9600,8N1"
 
     @classmethod
     def parse(cls, line: str) -> Endpoint:
         parts = line.rstrip("\n").split(" ", 4)
-        if len(parts) != 5 or parts[3] not in ("tcp", "pty"):
+        if len(parts) != 5 or parts[3] not in ("tcp", "pty", "serial", "rfc2217"):
             raise AssertionError(f"not an endpoint line: {line!r}")
         return cls(*parts)
 
     @property
     def host(self) -> str:
-        assert self.kind == "tcp", self
+        assert self.kind in ("tcp", "rfc2217"), self
         return self.address.rsplit(":", 1)[0].strip("[]")
 
     @property
     def port(self) -> int:
-        assert self.kind == "tcp", self
+        assert self.kind in ("tcp", "rfc2217"), self
         return int(self.address.rsplit(":", 1)[1])
 
     @property
@@ -241,7 +241,8 @@ class Omsd:
     def __call__(self, *args: str, config: str | None = None, expect: int | None = None) -> Daemon:
         """Start ``omsd ARGS`` (with ``--view plain`` unless a view is given) and wait for its
         endpoint lines. ``config`` is the text of a TOML file to write and pass as ``--config``;
-        ``expect`` the number of endpoint lines (by default one per ``--tcp`` and ``--pty``)."""
+        ``expect`` the number of endpoint lines (by default one per ``--tcp``, ``--pty``,
+        ``--serial`` and ``--rfc2217``)."""
         argv = list(args)
         if config is not None:
             self._configs += 1
@@ -253,7 +254,7 @@ class Omsd:
         if "--view" not in argv:
             argv += ["--view", "plain"]
         if expect is None:
-            expect = sum(a in ("--tcp", "--pty") for a in argv)
+            expect = sum(a in ("--tcp", "--pty", "--serial", "--rfc2217") for a in argv)
         daemon = Daemon(argv, expect, self.directory)
         self.daemons.append(daemon)
         return daemon

@@ -253,7 +253,8 @@ def test_a_gone_clients_done_and_answers_never_reach_the_next(
     assert b.ask(b"AX RP").lstrip(b"-").isdigit()
     assert b.quiet(1.5) == b""  # the move ends at 1 s: its done marker was A's
     assert s.ctl.state()["axes"]["X"]["position"] == 1000
-    assert "bytes for " in s.daemon.stderr and ": it has gone" in s.daemon.stderr
+    # (the log's lines of a turn are written after its replies: wait for them)
+    assert wait_for(lambda: "bytes for " in s.daemon.stderr and ": it has gone" in s.daemon.stderr)
 
 
 @pytest.mark.parametrize("link", ["driver", "raw"])

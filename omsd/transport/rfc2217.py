@@ -1,0 +1,326 @@
+"""RFC 2217 endpoints: a board on a telnet COM-port-control socket, as a serial device server
+(a Moxa NPort, ser2net, pyserial's ``rfc2217_server.py``) would put the card's port on the
+network.
+
+A client (pyserial's ``serial_for_url("rfc2217://HOST:PORT")``, a Windows COM-port redirector,
+``socat``'s or ``ser2net``'s) connects, negotiates the telnet options and sets the port as it
+would a local one: baud rate, data bits, parity, stop bits, flow control, DTR and RTS, a break.
+The telnet side is pyserial's own server code (``serial.rfc2217.PortManager``): it answers the
+negotiation, takes the telnet commands out of what the client sends (:meth:`Rfc2217Client._take`,
+before the bytes reach the board) and is told the settings through a :class:`VirtualPort`,
+which keeps them, logs each change (one line in the traffic log: ``line 19200 8N1``, ``DTR
+off``, ``break on``) and, with ``pacing`` on, paces the board's output at the line the client set
+(:class:`omsd.pacing.Pacer`). The modem lines it reports are those of a card that is there and
+ready: CTS, DSR and CD on, RI off. The board's bytes are escaped on the way out (an IAC, 0xFF,
+doubled), so any byte passes both ways.
+
+Otherwise it is a TCP endpoint (:class:`omsd.transport.tcp.TcpClient`): one client at a time,
+shared with the board's plain TCP endpoints (``second_client``), each connection a session of
+the board's service, ``linger`` for a client that stops sending. Plain TCP endpoints are not
+affected: they pass bytes untouched, 0xFF included.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+from omsd.pacing import Line, Pacer
+from omsd.service import BoardService
+from omsd.transport.tcp import READ_SIZE, TcpClient
+
+IAC = b"\xff"
+
+# The buffer every RFC 2217 connection reads into (see omsd.transport.tcp's, same reasoning: the
+# loop calls get_buffer and buffer_updated back to back on its one thread).
+_READ_BUFFER = memoryview(bytearray(READ_SIZE))
+
+
+class VirtualPort:
+    """The serial port a :class:`~serial.rfc2217.PortManager` manages: the settings the client
+    made, kept, logged when they change, and given to the pacer. What PortManager reads and sets
+    (pyserial 3.5): ``baudrate``, ``bytesize``, ``parity``, ``stopbits``, ``xonxoff``,
+    ``rtscts``, ``dtr``, ``rts``, ``break_condition``; it reads ``cts``, ``dsr``, ``ri``,
+    ``cd`` and calls ``reset_input_buffer`` / ``reset_output_buffer`` (a purge)."""
+
+    def __init__(self, client: Rfc2217Client) -> None:
+        self._client = client
+        self._line = Line()
+        self._xonxoff = False
+        self._rtscts = False
+        self._dtr = True  # a port just opened: DTR and RTS on
+        self._rts = True
+        self._break = False
+        # the card is there and ready
+        self.cts = True
+        self.dsr = True
+        self.cd = True
+        self.ri = False
+
+    @property
+    def line(self) -> Line:
+        return self._line
+
+    def _say(self, what: str) -> None:
+        client = self._client
+        client.service.log.info(f"{client.service.name}: {client.label}: {what}")
+
+    def _set_line(self, line: Line) -> None:
+        if line != self._line:
+            self._line = line
+            self._say(f"line {line}")
+            self._client.line_changed(line)
+
+    # -- the line -------------------------------------------------------------------------------
+
+    @property
+    def baudrate(self) -> int:
+        return self._line.baud
+
+    @baudrate.setter
+    def baudrate(self, value: int) -> None:
+        if not isinstance(value, int) or value <= 0:
+            raise ValueError(f"not a baud rate: {value!r}")
+        self._set_line(Line(value, self._line.bytesize, self._line.parity, self._line.stopbits))
+
+    @property
+    def bytesize(self) -> int:
+        return self._line.bytesize
+
+    @bytesize.setter
+    def bytesize(self, value: int) -> None:
+        if value not in (5, 6, 7, 8):
+            raise ValueError(f"not a data size: {value!r}")
+        self._set_line(Line(self._line.baud, value, self._line.parity, self._line.stopbits))
+
+    @property
+    def parity(self) -> str:
+        return self._line.parity
+
+    @parity.setter
+    def parity(self, value: str) -> None:
+        if value not in ("N", "E", "O", "M", "S"):
+            raise ValueError(f"not a parity: {value!r}")
+        self._set_line(Line(self._line.baud, self._line.bytesize, value, self._line.stopbits))
+
+    @property
+    def stopbits(self) -> float:
+        stop = self._line.stopbits
+        return int(stop) if stop == int(stop) else stop  # PortManager looks 1 and 2 up as ints
+
+    @stopbits.setter
+    def stopbits(self, value: float) -> None:
+        if value not in (1, 1.5, 2):
+            raise ValueError(f"not a number of stop bits: {value!r}")
+        self._set_line(Line(self._line.baud, self._line.bytesize, self._line.parity, value))
+
+    # -- flow control and the control lines ----------------------------------------------------
+
+    @property
+    def xonxoff(self) -> bool:
+        return self._xonxoff
+
+    @xonxoff.setter
+    def xonxoff(self, value: bool) -> None:
+        if value != self._xonxoff:
+            self._xonxoff = value
+            self._say(f"XON/XOFF flow control {'on' if value else 'off'}")
+
+    @property
+    def rtscts(self) -> bool:
+        return self._rtscts
+
+    @rtscts.setter
+    def rtscts(self, value: bool) -> None:
+        if value != self._rtscts:
+            self._rtscts = value
+            self._say(f"RTS/CTS flow control {'on' if value else 'off'}")
+
+    @property
+    def dtr(self) -> bool:
+        return self._dtr
+
+    @dtr.setter
+    def dtr(self, value: bool) -> None:
+        if value != self._dtr:
+            self._dtr = value
+            self._say(f"DTR {'on' if value else 'off'}")
+
+    @property
+    def rts(self) -> bool:
+        return self._rts
+
+    @rts.setter
+    def rts(self, value: bool) -> None:
+        if value != self._rts:
+            self._rts = value
+            self._say(f"RTS {'on' if value else 'off'}")
+
+    @property
+    def break_condition(self) -> bool:
+        return self._break
+
+    @break_condition.setter
+    def break_condition(self, value: bool) -> None:
+        if value != self._break:
+            self._break = value
+            self._say(f"break {'on' if value else 'off'}")
+
+    def reset_input_buffer(self) -> None:
+        """Purge what the port received and has not sent to the client: the board's paced
+        output."""
+        dropped = self._client.purge_output()
+        if dropped:
+            self._say(f"purged {dropped} bytes of the board's output not sent yet")
+
+    def reset_output_buffer(self) -> None:
+        """Purge what the client sent and the port has not passed on: what the board has not
+        taken."""
+        dropped = self._client.purge_input()
+        if dropped:
+            self._say(f"purged {dropped} bytes of its input the board had not taken")
+
+
+class _Raw:
+    """The connection PortManager writes its telnet answers to: the socket, unescaped."""
+
+    def __init__(self, client: Rfc2217Client) -> None:
+        self._client = client
+
+    def write(self, data: bytes) -> None:
+        transport = self._client.transport
+        if transport is not None and not transport.is_closing():
+            transport.write(data)
+
+
+class _Logger:
+    """PortManager's logger: its warnings and errors (an option refused, a bad setting) go to the
+    daemon's log; its info and debug lines are left out (:class:`VirtualPort` logs the settings
+    that change), but for the negotiation's success, said once."""
+
+    def __init__(self, client: Rfc2217Client) -> None:
+        self._client = client
+
+    def _line(self, message: str) -> str:
+        client = self._client
+        return f"{client.service.name}: {client.label}: RFC 2217: {message}"
+
+    def debug(self, message: str, *args: Any) -> None:
+        pass
+
+    def info(self, message: str, *args: Any) -> None:
+        if message == "client accepts RFC 2217" and not self._client.negotiated:
+            self._client.negotiated = True
+            self._client.service.log.info(self._line("negotiated"))
+
+    def warning(self, message: str, *args: Any) -> None:
+        self._client.service.log.warning(self._line(message))
+
+    error = warning
+
+
+class Rfc2217Client(TcpClient):
+    """One RFC 2217 connection: a :class:`TcpClient` whose bytes in go through the telnet filter
+    before the board sees them and whose bytes out are escaped (and paced, with ``pacing``)."""
+
+    def __init__(
+        self, service: BoardService, endpoint: str, policy: str, pacing: bool = False
+    ) -> None:
+        super().__init__(service, endpoint, policy)
+        self.port = VirtualPort(self)
+        self.manager: Any = None  # serial.rfc2217.PortManager, once connected
+        self.negotiated = False
+        self._normal: Any = None
+        self.pacer: Pacer | None = None
+        self._pacing = pacing
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        super().connection_made(transport)
+        if self.transport is None:  # refused, or the cable is cut
+            return
+        from serial import rfc2217  # type: ignore[import-untyped]
+
+        if self._pacing:
+            self.pacer = Pacer(asyncio.get_running_loop(), self.port.line.chars_per_second)
+        # PortManager sends its option requests at once
+        self._normal = rfc2217.M_NORMAL  # its filter's state between telnet commands
+        self.manager = rfc2217.PortManager(self.port, _Raw(self), _Logger(self))
+
+    def line_changed(self, line: Line) -> None:
+        if self.pacer is not None:
+            self.pacer.chars_per_second = line.chars_per_second
+
+    # -- in: telnet commands out of the way ----------------------------------------------------
+
+    def get_buffer(self, sizehint: int) -> memoryview:
+        return _READ_BUFFER
+
+    def buffer_updated(self, nbytes: int) -> None:
+        self.data_received(bytes(_READ_BUFFER[:nbytes]))
+
+    def _take(self, data: bytes) -> None:
+        """What the client wrote, its telnet commands handled and taken out (every way in goes
+        through here: a read, and a connection being taken over)."""
+        manager = self.manager
+        if manager is not None:
+            data = self._filter(manager, data)
+        super()._take(data)
+
+    def _filter(self, manager: Any, data: bytes) -> bytes:
+        normal = self._normal
+        if IAC not in data and manager.mode == normal and manager.suboption is None:
+            return data  # no telnet in it: the bytes are the data (what filter would yield)
+        try:
+            return b"".join(manager.filter(data))
+        except (KeyError, IndexError, ValueError) as exc:  # a setting PortManager cannot map
+            self.service.log.warning(
+                f"{self.service.name}: {self.label}: RFC 2217: ignored a bad request ({exc!r})"
+            )
+            manager.mode = normal
+            manager.suboption = None
+            return b""
+
+    # -- out: escaped, and paced --------------------------------------------------------------
+
+    def send(self, data: bytes) -> None:
+        if self.pacer is not None:
+            self.pacer.send(self._write, data)
+        else:
+            self._write(data)
+
+    def _write(self, data: bytes) -> None:
+        super()._write(data.replace(IAC, IAC + IAC))
+
+    # -- purges, and the end ------------------------------------------------------------------
+
+    def purge_output(self) -> int:
+        return self.pacer.clear() if self.pacer is not None else 0
+
+    def purge_input(self) -> int:
+        dropped = len(self._pending)
+        self._pending.clear()
+        self._flow()
+        return dropped
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if self.pacer is not None:
+            self.pacer.clear()
+        super().connection_lost(exc)
+
+
+async def serve_rfc2217(
+    service: BoardService, host: str, port: int, policy: str, pacing: bool = False
+) -> tuple[asyncio.Server, str, int]:
+    """Listen for RFC 2217 clients of the board; returns the server and the address bound (port
+    0 asks the system for a free port)."""
+    loop = asyncio.get_running_loop()
+    label = [f"rfc2217:{host}:{port}"]
+    server = await loop.create_server(
+        lambda: Rfc2217Client(service, label[0], policy, pacing), host, port, reuse_address=True
+    )
+    bound = server.sockets[0].getsockname()
+    label[0] = f"rfc2217:{bound[0]}:{bound[1]}"
+    return server, str(bound[0]), int(bound[1])
+
+
+__all__ = ["Rfc2217Client", "VirtualPort", "serve_rfc2217"]

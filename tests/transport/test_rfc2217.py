@@ -1,0 +1,267 @@
+"""The RFC 2217 endpoint (omsd.transport.rfc2217) in process, with pyserial's own client
+(``serial_for_url("rfc2217://...")``, in a thread): it negotiates, sets the line, DTR, RTS and a
+break (each logged), talks to the board, and 0xFF passes both ways (escaped as IAC IAC on the
+wire). With pacing, the line the client set paces the board's output."""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+import time
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import pytest
+
+from omsd.pacing import Line
+from omsd.transport.rfc2217 import VirtualPort, serve_rfc2217
+from omsd.transport.tcp import serve_tcp
+
+from .helpers import make_service, until
+
+serial = pytest.importorskip("serial")
+
+# pyserial 3.5's client names its reader thread the old way
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning:serial.rfc2217")
+
+T = TypeVar("T")
+
+
+async def in_thread(work: Callable[[], T]) -> T:
+    return await asyncio.wait_for(asyncio.to_thread(work), timeout=20)
+
+
+def connect(port: int, **settings: Any) -> Any:
+    return serial.serial_for_url(f"rfc2217://127.0.0.1:{port}", timeout=3, **settings)
+
+
+async def test_pyserial_negotiates_sets_the_port_and_talks_to_the_board() -> None:
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+
+    def session() -> list[bytes]:
+        client = connect(port, baudrate=9600)
+        try:
+            client.write(b"WY")
+            first = client.read_until(b"\n")
+            client.baudrate = 19200
+            client.bytesize = serial.SEVENBITS
+            client.parity = serial.PARITY_EVEN
+            client.dtr = False
+            client.rts = False
+            client.send_break(0.05)
+            client.write(b"RP")
+            second = client.read_until(b"\n")
+            return [first, second, bytes([client.cts, client.dsr, client.cd, client.ri])]
+        finally:
+            client.close()
+
+    try:
+        first, second, lines = await in_thread(session)
+        assert first == b"PC48 ver 3.00-4\n"
+        assert second == b"0\n"
+        assert lines == b"\x01\x01\x01\x00"  # CTS, DSR, CD on; RI off
+        await until(lambda: "disconnected" in log.getvalue())
+        text = log.getvalue()
+        label = f"rfc2217:127.0.0.1:{port} #"
+        for said in (
+            "RFC 2217: negotiated",
+            "line 19200 8N1",
+            "line 19200 7N1",
+            "line 19200 7E1",
+            "DTR off",
+            "RTS off",
+            "break on",
+            "break off",
+        ):
+            assert said in text, said
+            assert any(label in line and said in line for line in text.splitlines()), said
+        assert "line 9600" not in text  # the client's 9600 8N1 is what the port had
+        assert "WY" in text and "PC48 ver 3.00-4" in text  # traffic, without telnet in it
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_0xff_passes_both_ways_escaped_on_the_wire() -> None:
+    """With the board's echo on (EN) it sends back what it is sent: 0xFF from the client reaches
+    the board as one byte and comes back as one; and an end-of-string character 0xFF ends every
+    reply with one."""
+    service, _, recorder = make_service(link="raw")
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+
+    def session() -> bytes:
+        client = connect(port)
+        try:
+            client.write(b"EN\xff\r")
+            echoed: bytes = client.read_until(b"#\r")
+            return echoed
+        finally:
+            client.close()
+
+    try:
+        echoed = await in_thread(session)
+        assert b"\xff" in echoed and b"\xff\xff" not in echoed
+        assert recorder.received() == b"EN\xff\r"  # no telnet, one 0xFF
+    finally:
+        server.close()
+        service.close()
+    service, _, _ = make_service(eos=0xFF)
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+
+    def ask() -> bytes:
+        client = connect(port)
+        try:
+            client.write(b"WY")
+            reply: bytes = client.read_until(b"\xff")
+            return reply
+        finally:
+            client.close()
+
+    try:
+        assert await in_thread(ask) == b"PC48 ver 3.00-4\xff"
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_on_the_wire_the_board_s_0xff_is_doubled() -> None:
+    service, _, _ = make_service(eos=0xFF)
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+
+    def raw() -> bytes:
+        with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
+            sock.sendall(b"WY")
+            got = b""
+            while not got.endswith(b"\xff\xff"):
+                got += sock.recv(4096)
+            return got
+
+    try:
+        got = await in_thread(raw)
+        # the telnet option requests first (IAC WILL/DO ...), then the reply, its 0xFF doubled
+        assert got.endswith(b"PC48 ver 3.00-4\xff\xff")
+        assert got.startswith(b"\xff")
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_plain_tcp_stays_byte_transparent() -> None:
+    service, _, recorder = make_service(eos=0xFF)
+    server, _, port = await serve_tcp(service, "127.0.0.1", 0, "takeover")
+
+    def raw() -> bytes:
+        with socket.create_connection(("127.0.0.1", port), timeout=3) as sock:
+            sock.sendall(b"\xff\xfa\x2cWY")  # what telnet would read as IAC SB COM-PORT
+            got = b""
+            while not got.endswith(b"PC48 ver 3.00-4\xff"):
+                got += sock.recv(4096)
+            return got
+
+    try:
+        got = await in_thread(raw)
+        assert got.endswith(b"PC48 ver 3.00-4\xff") and b"\xff\xff" not in got
+        assert recorder.received().startswith(b"\xff\xfa\x2c")
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_pacing_follows_the_baud_rate_the_client_sets() -> None:
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover", pacing=True)
+
+    def session() -> tuple[bytes, float]:
+        client = connect(port, baudrate=1200)  # 120 characters a second
+        try:
+            client.write(b"WY")
+            began = time.monotonic()
+            reply = client.read_until(b"\n")
+            return reply, time.monotonic() - began
+        finally:
+            client.close()
+
+    try:
+        reply, took = await in_thread(session)
+        assert reply == b"PC48 ver 3.00-4\n"
+        assert took >= (len(reply) - 1) / 120  # a lower bound: the pacer's times are tested
+        assert "line 1200 8N1" in log.getvalue()  # on a manual clock (test_pacing.py)
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_a_second_client_takes_over_across_tcp_and_rfc2217() -> None:
+    service, log, _ = make_service()
+    tcp, _, tcp_port = await serve_tcp(service, "127.0.0.1", 0, "takeover")
+    rfc, _, rfc_port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+
+    def session() -> bytes:
+        with socket.create_connection(("127.0.0.1", tcp_port), timeout=3) as sock:
+            sock.sendall(b"WY")
+            sock.recv(100)
+            client = connect(rfc_port)
+            try:
+                client.write(b"WY")
+                reply: bytes = client.read_until(b"\n")
+            finally:
+                client.close()
+            assert sock.recv(100) == b""  # closed: taken over
+            return reply
+
+    try:
+        assert await in_thread(session) == b"PC48 ver 3.00-4\n"
+        assert "takes over from tcp:127.0.0.1:" in log.getvalue()
+    finally:
+        tcp.close()
+        rfc.close()
+        service.close()
+
+
+class _Client:
+    """What a VirtualPort needs of its connection, for the unit tests below."""
+
+    def __init__(self, service: Any) -> None:
+        self.service = service
+        self.label = "rfc2217:test"
+        self.lines: list[Line] = []
+
+    def line_changed(self, line: Line) -> None:
+        self.lines.append(line)
+
+    def purge_output(self) -> int:
+        return 3
+
+    def purge_input(self) -> int:
+        return 0
+
+
+async def test_the_virtual_port_keeps_checks_and_logs_the_settings() -> None:
+    service, log, _ = make_service()
+    client = _Client(service)
+    port = VirtualPort(client)  # type: ignore[arg-type]
+    port.baudrate = 9600  # what it had: nothing said
+    assert log.getvalue() == "" and client.lines == []
+    port.baudrate = 38400
+    port.stopbits = 2
+    assert client.lines == [Line(38400), Line(38400, stopbits=2)]
+    with pytest.raises(ValueError):
+        port.bytesize = 9
+    with pytest.raises(ValueError):
+        port.parity = "X"
+    port.rtscts = True
+    port.reset_input_buffer()
+    text = log.getvalue()
+    assert "rfc2217:test: line 38400 8N1" in text and "line 38400 8N2" in text
+    assert "RTS/CTS flow control on" in text
+    assert "purged 3 bytes of the board's output not sent yet" in text
+    service.close()
+
+
+def test_escaping_matches_pyserial_s() -> None:
+    from serial.rfc2217 import PortManager  # type: ignore[import-untyped]
+
+    data = bytes(range(256)) * 2
+    escaped = b"".join(PortManager.escape(None, data))
+    assert escaped == data.replace(b"\xff", b"\xff\xff")
