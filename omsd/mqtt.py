@@ -92,17 +92,12 @@ from typing import Any
 import aiomqtt
 
 from omsd.board.events import (
-    CommandErrorEvent,
-    DoneEvent,
     Event,
-    LimitEvent,
-    ServoTripEvent,
-    SlipEvent,
-    describe,
 )
 from omsd.config import MqttConfig
 from omsd.control.protocol import ControlError
 from omsd.control.server import ControlServer
+from omsd.control.watch import event_record as event_payload  # one event format for both
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Traffic, TrafficLog
 
@@ -319,30 +314,6 @@ def board_state(service: BoardService) -> dict[str, Any]:
     state["board"] = service.name
     state["t"] = time.time()
     return state
-
-
-def event_payload(service: BoardService, event: Event, seq: int, wall: float) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "seq": seq,
-        "board": service.name,
-        "time": event.time,
-        "t": wall,
-        "text": describe(event),
-    }
-    if isinstance(event, DoneEvent):
-        out["kind"] = "done"
-        out["done_register"] = event.done_register
-        out["axes"] = [a.letter for a in service.board.axes if event.done_register & a.done_bit]
-    elif isinstance(event, LimitEvent):
-        out.update(kind="limit", axis=event.axis, direction=event.direction)
-    elif isinstance(event, SlipEvent):
-        out.update(kind="slip", axis=event.axis)
-    elif isinstance(event, ServoTripEvent):
-        out.update(kind="servo_trip", axis=event.axis, error=event.error)
-    else:
-        assert isinstance(event, CommandErrorEvent)
-        out.update(kind="command_error", error=event.kind.message, command=event.command)
-    return out
 
 
 def tls_context(config: MqttConfig) -> ssl.SSLContext | None:

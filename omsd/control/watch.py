@@ -62,7 +62,8 @@ _FAR = (AxisWorld().negative_limit, AxisWorld().positive_limit)
 
 
 def event_record(service: BoardService, event: Event, seq: int, wall: float) -> dict[str, Any]:
-    """One event as the subscription (and the MQTT bridge's ``event`` topic) gives it."""
+    """One event as the subscription and the MQTT bridge's ``event`` topic give it (the bridge
+    imports it as ``omsd.mqtt.event_payload``)."""
     out: dict[str, Any] = {
         "seq": seq,
         "board": service.name,
