@@ -257,7 +257,7 @@ class BoardService:
         stops reading until :meth:`Client.input_room` is called).
 
         The log is held meanwhile: the lines of the bytes in, the replies, the events, are made
-        and written after the replies have gone to the client (issue 16)."""
+        and written in one go, just before the replies are sent (:meth:`_run`)."""
         if self._closed:
             return 0
         if not self._clean:
@@ -363,7 +363,7 @@ class BoardService:
 
     def service(self) -> None:
         """Let the board run to now; deliver its output; schedule the next wake-up. The log is
-        held meanwhile (its lines are written after the output)."""
+        held meanwhile (its lines are written just before the output is sent)."""
         if self._closed:
             return
         log = self.log
@@ -387,8 +387,16 @@ class BoardService:
             if self.observers:
                 for observer in list(self.observers):
                     observer.event(self, now, event)
-        for session, data in out.pieces:
-            self._route(session, data)
+        if out.pieces:
+            sending = [self._route(session, data) for session, data in out.pieces]
+            # the lines of this turn are in the file before any client can have a reply
+            self.log.write_kept()
+            for client, data in sending:
+                if client is not None:
+                    if self._clean:
+                        client.send(data)  # the fast path: nothing on the cable
+                    else:
+                        self._deliver(client, data)
         if self._waiting:
             # never call back into a client from here: a client may be inside feed()
             room = self.link.room
@@ -403,21 +411,19 @@ class BoardService:
                     lingering.finish()
         self._reschedule()
 
-    def _route(self, session: int, data: bytes) -> None:
-        """Output of ``session`` to its client; the board's own (0) to the last writer."""
+    def _route(self, session: int, data: bytes) -> tuple[Client | None, bytes]:
+        """Log the output of ``session`` and say where it goes: its client; the board's own (0)
+        to the last writer; ``None`` when that has gone."""
         client = self._live.get(session) if session else self.active
         if client is not None:
             self._traffic(client.label, Direction.OUT, data)
-            if self._clean:
-                client.send(data)  # the fast path: nothing on the cable
-            else:
-                self._deliver(client, data)
-            return
+            return client, data
         gone = self._gone.get(session) if session else None
         label = f"(gone: {gone})" if gone is not None else "(no client)"
         self._traffic(label, Direction.OUT, data)
         if gone is not None:
             self.log.info(f"{self.name}: discarded {len(data)} bytes for {gone}: it has gone")
+        return None, data
 
     def _reschedule(self) -> None:
         if not self._closed and self.observers:

@@ -8,7 +8,8 @@ The fast paths, each a named place in the code:
   (``DriverLink._straight_through``, against ``DriverLink.through_buffer``) and its one framed
   reply (``DriverLink._collect``, against ``DriverLink.collect_all``);
 * the service's whole cable (``BoardService._clean``: ``client.send`` instead of ``_deliver``)
-  and its held log (written after the replies, against a log written at once);
+  and its held log (the file's lines written per turn before the replies, the view's after
+  them, against a log written at once);
 * the TCP endpoint's reused buffer (``TcpClient.buffer_updated``, a BufferedProtocol, against
   ``data_received``, the Protocol's way) with its flow control;
 * the pty endpoint's read into the shared buffer and its write without a backlog (against

@@ -1,9 +1,11 @@
 """The traffic log held (``TrafficLog.hold`` ... ``release``, issue 16) against the log written at
 once, and against the log as it was before issue 16.
 
-The service holds the log while it handles a client's bytes or a deadline and the lines are
-written when the outermost hold is released. Whatever the holds (none, nested, around any run of
-calls, left open at ``close``), the same calls must give the same bytes: in the file (its JSON
+The service holds the log while it handles a client's bytes or a deadline; the file's lines are
+written by ``write_kept`` (before the turn's replies are sent) or when the outermost hold is
+released, the view's at that release. Whatever the holds and ``write_kept`` calls (none,
+nested, around any run of calls, left open at ``close``), the same calls must give the same
+bytes: in the file (its JSON
 lines, across ``reopen`` and a rotation), and on the stream (plain with and without journald
 prefixes, rich in colour, off). The log before issue 16 (``omsd/telemetry/traffic.py`` at commit
 ae68309, loaded from git; skipped where there is no git history) must agree too.
@@ -14,6 +16,7 @@ from __future__ import annotations
 import errno
 import importlib.util
 import io
+import json
 import os
 import pathlib
 import subprocess
@@ -91,7 +94,7 @@ CALL = st.one_of(
     st.tuples(st.sampled_from(["warning", "error"]), TIME, MESSAGE),
 )
 #: What only the held log does: the holds, nested and released anywhere.
-HOLDS = st.sampled_from([("hold",), ("release",)])
+HOLDS = st.sampled_from([("hold",), ("release",), ("write_kept",)])
 #: The file's life: reopened (the daemon's SIGHUP), rotated (renamed, then reopened) or closed.
 LIFE = st.sampled_from([("reopen",), ("rotate",), ("close",)])
 CALLS = st.lists(st.one_of(CALL, CALL, CALL, HOLDS, HOLDS, LIFE), max_size=60)
@@ -126,6 +129,9 @@ def play(log: Any, module: Any, where: Logs, calls: list[tuple[Any, ...]], held:
             if held and depth:
                 log.release()
                 depth -= 1
+        elif kind == "write_kept":
+            if held:
+                log.write_kept()
         elif kind == "reopen":
             log.reopen()
         elif kind == "rotate":
@@ -257,6 +263,34 @@ def test_held_lines_wait_for_the_outermost_release(tmp_path: pathlib.Path) -> No
     log.info("at once")  # not held: written at once
     assert out.getvalue().endswith(" at once\n")
     assert len(path.read_text().splitlines()) == 4
+    log.close()
+
+
+def test_write_kept_writes_the_file_now_and_the_view_at_the_release(
+    tmp_path: pathlib.Path,
+) -> None:
+    """The service's order: the turn's lines in the file before the replies are sent, the
+    view's after them (its formatting off the reply path)."""
+    out = io.StringIO()
+    path = tmp_path / "t.jsonl"
+    log = TrafficLog("plain", file=path, stream=out, env={}, clock=lambda: 1.0)
+    log.hold()
+    log.record(Traffic(1.0, "b", "e", Direction.IN, b"RP"))
+    log.record(Traffic(1.0, "b", "e", Direction.OUT, b"0\r\n"))
+    log.write_kept()
+    assert [json.loads(line)["dir"] for line in path.read_text().splitlines()] == ["in", "out"]
+    assert out.getvalue() == ""
+    log.event(1.0, "b", "done X")
+    log.write_kept()
+    log.write_kept()  # nothing new: nothing written
+    assert len(path.read_text().splitlines()) == 3
+    log.release()
+    assert [line.split(" ", 1)[1] for line in out.getvalue().splitlines()] == [
+        "b e <- RP",
+        "b e -> 0<CR><LF>",
+        "b [done X]",
+    ]
+    assert len(path.read_text().splitlines()) == 3  # each line once
     log.close()
 
 

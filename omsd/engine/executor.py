@@ -34,6 +34,8 @@ OpFunction = Callable[["Executor", Axis, Op, float], Result]
 SensorHook = Callable[["Executor", Axis, float], None]
 
 MAX_STEPS = 10_000  # ops one axis may run at one instant (a loop of zero-time ops)
+#: A time wait is over this early (float noise in times made of ticks and milliseconds).
+WAIT_SLACK = 1e-12
 _IDLE = Motion.IDLE  # a global: an Enum member read through its class costs 70 ns in 3.11
 
 
@@ -114,7 +116,7 @@ class Executor:
         if w.kind == "motion":
             return axis.motion is _IDLE
         if w.kind == "time":
-            return w.until is not None and t >= w.until - 1e-12
+            return w.until is not None and t >= w.until - WAIT_SLACK
         if w.kind == "group":
             assert w.group is not None
             return w.group.released(w.round)
@@ -212,10 +214,13 @@ class Executor:
         frame = q.loops[-1]
         if again:
             target = frame.start + 1
-            if t - frame.began < 1e-12:
+            if t - frame.began < WAIT_SLACK:
                 # a pass that took no time: the next one waits for the next sample, as the
-                # board's command processor does at most a pass per sample of such a loop
-                frame.began = self.machine.clock.after(t)
+                # board's command processor does at most a pass per sample of such a loop.
+                # The next sample after t + WAIT_SLACK: a t a hair before a tick (within the
+                # slack) would otherwise find the wait for that tick over at once, and pass
+                # after pass would run at the same instant, for ever
+                frame.began = self.machine.clock.after(t + WAIT_SLACK)
                 return Wait("time", until=frame.began, jump=target)
             frame.began = t
             return target

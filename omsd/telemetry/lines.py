@@ -1,8 +1,8 @@
 """The traffic log's lines, made quickly: the view's plain and rich lines and the JSON lines.
 
-:class:`omsd.telemetry.traffic.TrafficLog` formats a batch of records after the replies that
-made them have been written (issue 16: the view off the reply path), but a busy board still
-makes two records per command, so each line here costs a few microseconds, not the tens that
+:class:`omsd.telemetry.traffic.TrafficLog` formats a turn's records in a batch (the file's
+lines just before the replies, the view's after them), and a busy board makes two records per
+command, so each line here costs a few microseconds, not the tens that
 ``datetime``, ``json.dumps`` and a ``rich`` ``Console.print`` per record cost. The lines are
 the same, byte for byte, as those ways made them (``tests/test_traffic_lines.py`` compares them
 on random records):

@@ -69,14 +69,15 @@ The file is opened for appending (``O_APPEND``; created ``0600`` if missing, or 
 group given, :func:`omsd.files.open_log`; an existing file keeps its permissions), and nothing
 is buffered in this process beyond one turn of the daemon's work. The daemon *holds* the log
 (:meth:`TrafficLog.hold`) while it handles what one client wrote, or one of a board's
-deadlines, and writes the lines of that turn when it has answered: the traffic in and out, the
-events and messages, in order, whole lines in one ``write(2)`` (the view's in one write to the
-stream), so that formatting them never delays a reply (issue 16). Not held, as at start-up and
-shutdown, each line is written at once. When the daemon crashes, even by SIGKILL, every record
-of the turns before is in the file; the records of the turn being handled are lost, and the
-last line in the file may be cut short. (A power failure is another matter: there is no
-fsync.) :meth:`TrafficLog.reopen` (the daemon's SIGHUP) opens the path again, for logrotate:
-after a rotation that renamed the file, the lines go to a new file at the path.
+deadlines. It writes the turn's lines to the file (:meth:`TrafficLog.write_kept`) when it has
+made the replies and before it sends them: the traffic in and out, the events and messages, in
+order, whole lines in one ``write(2)``; the view's lines follow the replies, in one write to
+the stream, so that their formatting never delays a reply. A reply is in the file before its
+client can have it: when the daemon crashes, even by SIGKILL, every byte a client got is in
+the file, and only the last line may be cut short. (A power failure is
+another matter: there is no fsync.) :meth:`TrafficLog.reopen` (the daemon's SIGHUP) opens the
+path again, for logrotate: after a rotation that renamed the file, the lines go to a new file
+at the path.
 
 Making the lines is :mod:`omsd.telemetry.lines`: the same bytes as ``datetime``,
 ``json.dumps`` and ``rich``'s ``Console.print`` made, in a fraction of their time.
@@ -222,9 +223,10 @@ class TrafficLog:
     fails (a full disk) is reported once as an error on the stream and then closed.
 
     **Held** (:meth:`hold` ... :meth:`release`, the board service's way while it handles a
-    client's bytes or a deadline): what is logged meanwhile is kept, in order, and formatted
-    and written when the outermost hold is released, after the replies have gone out, with one
-    write to the file and one to the stream. Not held, each call is written at once.
+    client's bytes or a deadline): what is logged meanwhile is kept, in order; its JSON lines
+    are written to the file by :meth:`write_kept` (the service's, just before a turn's replies
+    are sent) or when the outermost hold is released, the view's lines at that release, each
+    in one write. Not held, each call is written at once.
     """
 
     def __init__(
@@ -272,6 +274,7 @@ class TrafficLog:
                 raise TrafficLogError(exc.errno, exc.strerror or str(exc), str(file)) from exc
         self._held = 0  # depth of hold() calls not yet released
         self._queue: list[_Entry] = []  # what was logged while held, in order
+        self._filed = 0  # how many of them are in the file already (write_kept)
         self.wants_traffic = True
         """Whether traffic is shown or written anywhere (a caller may skip making records)."""
         self._wanted()
@@ -329,6 +332,18 @@ class TrafficLog:
         if not self._held and self._queue:
             self._flush()
 
+    def write_kept(self) -> None:
+        """Write what is kept to the file now, in one write; the holds stay, and the view's
+        lines wait for the release. The service calls it when it has made a turn's replies and
+        before it sends them, so that a reply is in the file before the client can have it
+        (even a SIGKILL then loses no line of what a client got) while the view's formatting
+        stays off the reply path."""
+        queue = self._queue
+        if self._fd is not None and len(queue) > self._filed:
+            lines = [self._json(entry) for entry in queue[self._filed :]]
+            self._filed = len(queue)
+            self._write_file("".join(lines))
+
     def reopen(self) -> bool:
         """Open the file's path again and write there from now on (logrotate's "reopen your
         log files", the daemon's SIGHUP): after a rotation that renamed the file, a new one is
@@ -378,14 +393,13 @@ class TrafficLog:
         """Format what is kept and write it: the JSON lines in one write to the file, the
         view's lines in one write to the stream."""
         entries, self._queue = self._queue, []
-        file = self._fd is not None
-        shown = self.view != "off"
+        filed, self._filed = self._filed, 0
         lines: list[str] = []
+        if self._fd is not None:
+            lines = [self._json(entry) for entry in entries[filed:]]
         view: list[str] = []
-        for entry in entries:
-            if file:
-                lines.append(self._json(entry))
-            if shown:
+        if self.view != "off":
+            for entry in entries:
                 self._show(entry, view)
         if lines:
             self._write_file("".join(lines))
