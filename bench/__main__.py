@@ -34,6 +34,7 @@ from bench import (
     throughput,
     versions,
     watch,
+    web,
 )
 from bench.settings import FULL, QUICK, Settings
 from bench.table import Row, render
@@ -49,6 +50,7 @@ BENCHMARKS: dict[str, Benchmark] = {
     "idle": cost.idle,
     "load": cost.load,
     "watch": watch.run,
+    "web": web.run,
     "scale": scale.run,
     "fidelity": fidelity.run,
     "startup": startup.run,

@@ -42,6 +42,7 @@ from omsd.defaults import (
     DEFAULT_MODEL,
     DEFAULT_TCP_PORT,
     DEFAULT_VIEW,
+    DEFAULT_WEB,
     LINKS,
     LOOPS,
     VIEWS,
@@ -161,6 +162,17 @@ def _parser() -> argparse.ArgumentParser:
         metavar="PATH",
         help="the control socket for omsd ctl, or off (default: $XDG_RUNTIME_DIR/omsd/"
         "control.sock; $RUNTIME_DIRECTORY/control.sock under systemd)",
+    )
+    p.add_argument(
+        "--web",
+        metavar="[HOST:]PORT",
+        help=f"serve the web dashboard there, e.g. {DEFAULT_WEB} (default: none, or [web]"
+        " listen); read-only unless --web-control",
+    )
+    p.add_argument(
+        "--web-control",
+        action="store_true",
+        help="the dashboard's buttons act on the boards (default: it only watches)",
     )
     p.add_argument(
         "--state",
@@ -444,6 +456,7 @@ def _start_and_serve(args: argparse.Namespace) -> int:
         load_config,
         with_control_option,
         with_state_option,
+        with_web_option,
     )
     from omsd.daemon import Daemon, StartupError
     from omsd.loops import LoopUnavailable, run
@@ -474,6 +487,7 @@ def _start_and_serve(args: argparse.Namespace) -> int:
             )
         config = with_state_option(config, args.state)
         config = with_control_option(config, args.control)
+        config = with_web_option(config, args.web, args.web_control)
     except ConfigError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2

@@ -42,6 +42,7 @@ from omsd.transport.tcp import serve_tcp
 if TYPE_CHECKING:
     from omsd.mqtt import MqttBridge
     from omsd.statefile import BoardFlash, StateFile
+    from omsd.web.server import WebServer
 
 
 def same_terminal(a: TextIO, b: TextIO) -> bool:
@@ -142,6 +143,8 @@ class Daemon:
         self.saver: FlashSaver | None = None
         self.control: ControlServer | None = None
         self.mqtt: MqttBridge | None = None
+        self.web: WebServer | None = None
+        self._web_control: ControlServer | None = None
 
     async def start(self) -> list[Endpoint]:
         # A fast path (issue 16: 1,000 boards ready within 2 s): a board is some thousand
@@ -215,6 +218,7 @@ class Daemon:
                 await self._start_serial(service)
             await self._start_control()
             self._start_mqtt()
+            await self._start_web()
             # the endpoint lines go out last: whoever reads them may use the control socket at
             # once, and a daemon that fails to start has announced nothing. On a terminal that
             # shows both standard output and the log, each endpoint is said once (the log file,
@@ -301,6 +305,14 @@ class Daemon:
             reason = exc.strerror or str(exc)
             where = exc.filename or runtime
             raise StartupError(f"cannot use {where}: {reason}") from None
+        if self.config.web is not None:
+            import importlib.util
+
+            if importlib.util.find_spec("aiohttp") is None:
+                raise StartupError(
+                    "the web dashboard needs aiohttp, which is not installed:"
+                    " pip install 'omsd[web]'"
+                )
         if self.config.state is not None:
             problem = state_file_problem(self.config.state)
             if problem is not None:
@@ -363,6 +375,32 @@ class Daemon:
             raise StartupError(f"mqtt: cannot set up TLS with {config.tls}: {exc}") from None
         bridge.start()
         self.mqtt = bridge
+
+    async def _start_web(self) -> None:
+        """The web dashboard (omsd.web), if ``[web]`` or ``--web`` asks for it. Like the MQTT
+        bridge it has a ControlServer of its own: it works with the control socket off."""
+        config = self.config.web
+        if config is None:
+            return
+        from omsd import __version__
+        from omsd.web.server import WebServer  # a daemon without a dashboard never loads aiohttp
+
+        services = {s.name: s for s in self.services}
+        control = ControlServer(services, lambda: self.endpoints, self.log)
+        web = WebServer(config, control, self.log, __version__)
+        try:
+            host, port = await web.start()
+        except OSError as exc:
+            reason = os.strerror(exc.errno) if exc.errno else str(exc)
+            raise StartupError(
+                f"cannot serve the web dashboard on {config.listen}: {reason.lower()}"
+            ) from None
+        self.web = web
+        self._web_control = control
+        shown = f"[{host}]" if ":" in host else host
+        what = "control" if config.control else "read-only"
+        token = "?token=..." if config.token is not None else ""
+        self.log.info(f"web dashboard http://{shown}:{port}/{token} ({what})")
 
     def _load_state(self) -> StateFile | None:
         """The boards' flash: "a corrupt or missing state file gives the factory defaults and
@@ -444,6 +482,12 @@ class Daemon:
         if self.mqtt is not None:  # first: "offline" goes out while the boards still run
             await self.mqtt.stop()
             self.mqtt = None
+        if self.web is not None:
+            await self.web.close()
+            self.web = None
+        if self._web_control is not None:
+            await self._web_control.close()
+            self._web_control = None
         if self.control is not None:
             await self.control.close()
             self.control = None

@@ -49,6 +49,8 @@ MQTTS_PORT = 8883  # IANA "secure-mqtt"
 DEFAULT_MQTT_PREFIX = "omsd"
 DEFAULT_KEEPALIVE = 60
 DEFAULT_STATE_RATE = 10.0
+DEFAULT_WEB = "127.0.0.1:8048"  # the web dashboard's address ([web] listen; --web)
+MIN_WEB_TOKEN = 16  # characters of a [web] token, at least
 MAX_STATE_RATE = 1000.0  # state publications per second per board, at most
 #: ``omsd console --wait``: at the end of a file or pipe, how long motion still running may take
 CONSOLE_WAIT = 30.0
@@ -103,10 +105,12 @@ __all__ = [
     "DEFAULT_STOPBITS",
     "DEFAULT_TCP_PORT",
     "DEFAULT_VIEW",
+    "DEFAULT_WEB",
     "FLOWS",
     "LINKS",
     "MAX_LINGER",
     "MAX_STATE_RATE",
+    "MIN_WEB_TOKEN",
     "MQTTS_PORT",
     "MQTT_PORT",
     "SECOND_CLIENT_POLICIES",

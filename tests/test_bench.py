@@ -11,6 +11,7 @@ targets' verdicts.
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -28,6 +29,7 @@ from bench.latency import median, percentile  # noqa: E402
 from bench.settings import QUICK  # noqa: E402
 from bench.table import Row, Target, render, skipped  # noqa: E402
 from bench.watch import NAMES as WATCH  # noqa: E402
+from bench.web import NAMES as WEB  # noqa: E402
 
 
 def latency_rows(kind: str) -> list[str]:
@@ -66,6 +68,7 @@ ROWS = [
     f"load growth, CPU per poll, {MOST} vs 1 board(s)",
     f"load over time, CPU 2nd / 1st half, {MOST} boards",
     *WATCH,
+    *WEB,
     f"{MANY}: ready, exec to last endpoint line / echo",
     f"{MANY}: resident memory / echo",
     f"{MANY}: memory of one board / echo's per TCP port and pty",
@@ -93,8 +96,15 @@ ROWS = [
     "replay of a 10-minute recorded session",
 ]
 
-MAY_BE_SKIPPED = {name for name in ROWS if "uvloop" in name or "Python 3.1" in name}
-"""Rows that need what --quick does not install (uvloop, other interpreters): they say why."""
+MAY_BE_SKIPPED = {
+    name
+    for name in ROWS
+    if "uvloop" in name
+    or "Python 3.1" in name
+    or (name in WEB and not os.environ.get("OMSD_NEED_CHROMIUM"))
+}
+"""Rows that need what --quick does not install (uvloop, other interpreters) or, outside CI, the
+browser .ci/run installs: they say why."""
 
 NO_BASELINE = {name for name in ROWS if "on the manual clock" in name}
 

@@ -322,7 +322,7 @@ FILE_ERRORS = [
     # unknown keys anywhere, with the allowed ones
     (
         "colour = 1\n" + MINIMAL,
-        "1: colour: unknown key; expected one of log, state, control, mqtt, board",
+        "1: colour: unknown key; expected one of log, state, control, mqtt, web, board",
     ),
     (
         MINIMAL + "modle = 'PC48-4'\n",

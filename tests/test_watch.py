@@ -208,6 +208,9 @@ async def test_a_subscription_to_some_boards(tmp_path: Path) -> None:
         ({"rate": 51}, "rate: expected messages a second above 0, at most 50"),
         ({"rate": True}, "rate: expected"),
         ({"rate": "10"}, "rate: expected"),
+        ({"rates": {"zz": 5}}, "rates: no board 'zz' in this subscription"),
+        ({"rates": {"xy": 0}}, "rates.xy: expected messages a second above 0, at most 50"),
+        ({"rates": [5]}, "rates: expected an object of board names and rates"),
         ({"traffic": "zz"}, "traffic: expected true, false or a board's name (xy), got 'zz'"),
         ({"traffic": 1}, "traffic: expected true, false or a board's name"),
     ],
@@ -268,6 +271,33 @@ async def test_a_move_streams_at_most_rate_a_second_and_then_nothing(tmp_path: P
         subscription = next(iter(lab_.control.subscriptions.values()))
         assert subscription.timer is None and subscription.moving == set()
         board.close()
+        stream.close()
+
+
+async def test_a_board_given_its_own_rate_is_looked_at_that_often(tmp_path: Path) -> None:
+    """``rates``: the board a view shows in detail at its rate, the others at a slower one
+    (the web dashboard's subscription). Looks are never closer than the fastest rate allows,
+    and each board comes in them no more often than its own."""
+    async with lab(tmp_path, BoardConfig(name="fast"), BoardConfig(name="slow")) as lab_:
+        stream = await lab_.stream()
+        snapshot = await stream.subscribe(rate=2, rates={"fast": 20})
+        assert (snapshot["rate"], snapshot["rates"]) == (2.0, {"fast": 20.0})
+        writers = []
+        for name in ("fast", "slow"):
+            _, board = await lab_.board(name)
+            board.write(b"AX VL2000 JG2000;")
+            writers.append(board)
+        got = await stream.quiet(2.0)
+        looks = states(got)
+        stamps = [m["t"] for m in looks]
+        assert min(b - a for a, b in itertools.pairwise(stamps)) >= 0.9 / 20
+        fast = [m["t"] for m in looks if "X" in m["boards"].get("fast", {}).get("axes", {})]
+        slow = [m["t"] for m in looks if "X" in m["boards"].get("slow", {}).get("axes", {})]
+        assert len(fast) >= 20 and len(looks) <= 20 * 2.0 + 2, (len(fast), len(looks))
+        assert 2 <= len(slow) <= 2 * 2.0 + 2, slow
+        assert min(b - a for a, b in itertools.pairwise(slow)) >= 0.9 / 2
+        for board in writers:
+            board.close()
         stream.close()
 
 

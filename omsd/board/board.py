@@ -28,6 +28,7 @@ from typing import Any
 
 from omsd.dialects import framing, lookup
 from omsd.dialects.interpreter import Interpreter
+from omsd.engine.axis import Axis
 from omsd.engine.machine import Machine
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
@@ -227,6 +228,29 @@ class Board(Machine):
 
     # -- inspection -----------------------------------------------------------------------------
 
+    @staticmethod
+    def _axis_snapshot(a: Axis, now: float) -> dict[str, Any]:
+        # the switches see the carriage once (the control API's subscriptions take a snapshot
+        # of every moving board 10 to 50 times a second)
+        carriage = a.carriage(now)
+        return {
+            "position": a.counter(now),
+            "encoder": a.encoder(now) if a.has_encoder else None,
+            "velocity": a.velocity(now),
+            "physical": a.phys(now),
+            "moving": a.motion is not Motion.IDLE,
+            "motion": a.motion.name.lower(),
+            "done": a.done,
+            "direction": a.direction,
+            "limit_negative": a.limit_active(-1, now, carriage),
+            "limit_positive": a.limit_active(1, now, carriage),
+            "home": a.home_sensed(now, carriage),
+            "aux": a.aux,
+            "queue_free": a.queue.free,
+            "velocity_setting": a.vl,
+            "acceleration_setting": a.ac,
+        }
+
     def snapshot(self, now: float) -> dict[str, Any]:
         """Everything a test or the control API may want to see, without side effects."""
         self.advance(now)
@@ -240,26 +264,7 @@ class Board(Machine):
             "outputs_low": self.outputs_low,
             "io_low": self.io_bits_low(now),
             "input_buffer": len(self.interpreter.buffer),
-            "axes": {
-                a.letter: {
-                    "position": a.counter(now),
-                    "encoder": a.encoder(now) if a.has_encoder else None,
-                    "velocity": a.velocity(now),
-                    "physical": a.phys(now),
-                    "moving": a.motion is not Motion.IDLE,
-                    "motion": a.motion.name.lower(),
-                    "done": a.done,
-                    "direction": a.direction,
-                    "limit_negative": a.limit_active(-1, now),
-                    "limit_positive": a.limit_active(1, now),
-                    "home": a.home_sensed(now),
-                    "aux": a.aux,
-                    "queue_free": a.queue.free,
-                    "velocity_setting": a.vl,
-                    "acceleration_setting": a.ac,
-                }
-                for a in self.axes
-            },
+            "axes": {a.letter: self._axis_snapshot(a, now) for a in self.axes},
         }
 
 

@@ -244,6 +244,7 @@ class DaemonConfig:
     state: Path | None = None  # the boards' flash (omsd.statefile); None: kept in memory only
     control: ControlConfig = field(default_factory=lambda: ControlConfig())
     mqtt: MqttConfig | None = None  # the MQTT bridge (omsd.mqtt); None: off
+    web: WebConfig | None = None  # the web dashboard (omsd.web); None: off
     state_group: str | None = None  # the state file is 0640 in this group; None: 0600
 
 
@@ -281,6 +282,34 @@ class MqttConfig:
     keepalive: int = DEFAULT_KEEPALIVE
     state_rate: float = DEFAULT_STATE_RATE
     traffic: bool = True
+
+
+@dataclass(frozen=True)
+class WebConfig:
+    """The web dashboard (:mod:`omsd.web`), on only with ``[web]`` or ``--web``: served at
+    ``listen``; ``control`` lets the page do what ``omsd ctl`` does (read-only without it);
+    ``token`` must be given by a browser (``?token=``) and is required for an address that is
+    not loopback (checked where the configuration is read)."""
+
+    listen: TcpEndpoint
+    control: bool = False
+    token: str | None = field(default=None, repr=False)
+
+    @property
+    def loopback(self) -> bool:
+        return is_loopback(self.listen.host)
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` is this machine only: ``localhost`` or a loopback address."""
+    if host == "localhost":
+        return True
+    import ipaddress
+
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False  # a host name: it may be anything
 
 
 # -- reading a configuration (the schema is imported here, when it is needed) -------------------
@@ -372,6 +401,38 @@ def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConf
     return replace(config, control=replace(config.control, socket=path, explicit=True))
 
 
+def with_web_option(config: DaemonConfig, web: str | None, control: bool) -> DaemonConfig:
+    """``--web [HOST:]PORT`` (the dashboard, replacing ``[web] listen``) and ``--web-control``
+    (its buttons). A token comes from a file's ``[web] token`` only (never a command line that
+    ``ps`` shows), so ``--web`` beyond loopback needs that file."""
+    if web is None and not control:
+        return config
+    from omsd.config.syntax import AddressProblem, tcp_address
+
+    current = config.web
+    if web is None:
+        if current is None:
+            raise ConfigError("--web-control", None, "needs --web [HOST:]PORT or a [web] table")
+        listen = current.listen
+    else:
+        try:
+            listen = tcp_address(int(web) if web.isdigit() else web)
+        except AddressProblem as exc:
+            raise ConfigError("--web", None, f"expected {exc}, got {web!r}") from None
+        except ValueError:
+            raise ConfigError("--web", None, f"expected [HOST:]PORT, got {web!r}") from None
+    token = None if current is None else current.token
+    if token is None and not is_loopback(listen.host):
+        raise ConfigError(
+            "--web",
+            None,
+            f"{listen} is not loopback: the dashboard needs a token there ([web] token in a"
+            " configuration file)",
+        )
+    allowed = control or (current is not None and current.control)
+    return replace(config, web=WebConfig(listen, allowed, token))
+
+
 def with_state_option(config: DaemonConfig, state: str | None) -> DaemonConfig:
     """``--state FILE`` on either form of the command line: the state file (relative to the
     working directory), in place of a file's ``[state] file``. ``None``: the configuration as
@@ -429,11 +490,14 @@ __all__ = [
     "Rfc2217Endpoint",
     "SerialEndpoint",
     "TcpEndpoint",
+    "WebConfig",
     "default_config",
     "default_pty_link",
     "from_options",
+    "is_loopback",
     "load_config",
     "runtime_directory",
     "with_control_option",
     "with_state_option",
+    "with_web_option",
 ]

@@ -37,6 +37,7 @@ from omsd.config.schema import (
     SerialTable,
     StateTable,
     TcpTable,
+    WebTable,
 )
 from omsd.config.wording import Default, Says, Table
 from omsd.config_errors import key_name, show
@@ -135,6 +136,7 @@ TABLES: tuple[tuple[str, type[Table]], ...] = (
     ("state", StateTable),
     ("control", ControlTable),
     ("mqtt", MqttTable),
+    ("web", WebTable),
     ("board", BoardTable),
     ("board.tcp", TcpTable),
     ("board.pty", PtyTable),
@@ -247,6 +249,11 @@ def document_of(config: DaemonConfig) -> dict[str, Any]:
             "traffic": mqtt.traffic,
         }
         document["mqtt"] = table
+    if config.web is not None:
+        web = config.web
+        document["web"] = {"listen": str(web.listen), "control": web.control}
+        if web.token is not None:
+            document["web"]["token"] = "(not shown)"
     document["board"] = [_board(board) for board in config.boards]
     return document
 

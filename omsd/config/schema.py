@@ -61,8 +61,11 @@ from omsd.config import (
     Rfc2217Endpoint,
     SerialEndpoint,
     TcpEndpoint,
+    WebConfig,
     default_pty_link,
+    is_loopback,
 )
+from omsd.config.syntax import tcp_address
 from omsd.config.values import (
     FIRMWARE_PATTERN,
     NAME_PATTERN,
@@ -101,6 +104,7 @@ from omsd.config.wording import (
     problem,
 )
 from omsd.config_errors import KeyPath, show
+from omsd.defaults import DEFAULT_WEB, MIN_WEB_TOKEN
 from omsd.models import MODELS, get_model, variant
 from omsd.models.spec import Model
 
@@ -857,6 +861,51 @@ class MqttTable(Table):
         )
 
 
+class WebTable(Table):
+    """The web dashboard: every board live in a browser, its traffic, and
+    with control = true the buttons of omsd ctl. Off without this table (or
+    --web)."""
+
+    listen: Annotated[TcpAddress, Default(DEFAULT_WEB)] = Field(
+        default_factory=lambda: tcp_address(DEFAULT_WEB),
+        description="Where the page is served. Loopback unless another address is named;"
+        " any other address needs a token.",
+    )
+    control: Flag = Field(
+        False,
+        description="Buttons that act on the boards (switches, inputs, slips, faults, reset,"
+        " time); false: the page only watches.",
+    )
+    token: (
+        Annotated[
+            str,
+            Says(
+                f"a string of at least {MIN_WEB_TOKEN} characters (the value given is not shown)",
+                accepts=Annotated[str, Field(min_length=MIN_WEB_TOKEN)],
+                secret=True,
+            ),
+        ]
+        | None
+    ) = Field(
+        None,
+        description="A secret the browser gives (open the page as /?token=...); required"
+        " for an address that is not loopback.",
+    )
+
+    @model_validator(mode="after")
+    def _token(self) -> Self:
+        if self.token is None and not is_loopback(self.listen.host):
+            raise problem(
+                detail=f"expected a token with an address that is not loopback, got none for"
+                f" {self.listen}",
+                at=("token",),
+            )
+        return self
+
+    def config(self) -> WebConfig:
+        return WebConfig(self.listen, self.control, self.token)
+
+
 class Document(Table):
     """An omsd configuration file: the boards, and the daemon's log, flash, control API and
     MQTT bridge."""
@@ -867,6 +916,7 @@ class Document(Table):
     state: StateTable = Field(default_factory=lambda: StateTable.model_validate({}))
     control: ControlTable = Field(default_factory=lambda: ControlTable.model_validate({}))
     mqtt: MqttTable | None = Field(None)
+    web: WebTable | None = Field(None)
     board: Annotated[
         list[BoardTable],
         Field(min_length=1),
@@ -938,6 +988,7 @@ class Document(Table):
             state=self.state.file,
             control=self.control.config(),
             mqtt=None if self.mqtt is None else self.mqtt.config(),
+            web=None if self.web is None else self.web.config(),
             state_group=self.state.group,
         )
 
@@ -983,6 +1034,7 @@ __all__ = [
     "SerialTable",
     "StateTable",
     "TcpTable",
+    "WebTable",
     "not_the_log_problem",
     "option_paths",
     "validate",

@@ -28,14 +28,21 @@ wait       board, until: done / idle / position, axis, position (with until     
            position), timeout (seconds of real time, default 10)
 ========== ========================================================================= =========
 
+A board's state (``state``, the snapshot's) is the engine's (``omsd.board.Board.snapshot``)
+with the board's ``clock``, ``faults``, ``link``, ``clients``, and ``world``: what the
+operations have forced and not released (``limits``: per axis [negative, positive], each true,
+false or null; ``home``: per axis; ``stalled``: the axes; ``inputs``: per bit).
+
 Streams (:mod:`omsd.control.watch`): ``subscribe`` turns the connection into a stream of the
 boards' life. Its arguments: ``boards`` (a list of names; default every board; ``board`` names
 one), ``rate`` (state messages a second at most, above 0 and at most :data:`MAX_RATE`, default
 :data:`DEFAULT_RATE`), ``traffic`` (false: byte counts only; true: every chunk of traffic of
 the boards too; a board's name: that board's chunks). Its reply's ``result`` is the snapshot,
 ``{"kind": "snapshot", "t": ..., "rate": 10.0, "traffic": false, "boards": [{"name", "model",
-"link", "endpoints", "travel", "state"}, ...]}`` (``state`` as the ``state`` op gives it;
-``travel``: the limit switches' positions the configuration gives, per axis). Then, each
+"link", "endpoints", "travel", "switches", "state"}, ...]}`` (``state`` as the ``state`` op
+gives it; ``travel``: the limit switches' positions the configuration gives, per axis;
+``switches``: per axis ``home`` [low, high] and, where configured, ``limits``, in the
+carriage's steps, the frame of the state's ``physical``). Then, each
 carrying the subscribe's ``id``:
 
 * ``{"id": 1, "kind": "state", "t": ..., "boards": {"xy": {"time": ..., "axes": {"X":
@@ -62,7 +69,7 @@ before. Requests sent during a stream are answered too, their replies among its 
 from __future__ import annotations
 
 import json
-from typing import Any
+from typing import Any, Protocol
 
 MAX_LINE = 64 * 1024  # a request longer than this is refused (and the connection closed)
 DEFAULT_RATE = 10.0  # state messages a second of a subscription, at most, unless told
@@ -85,6 +92,24 @@ OPS = (
 
 STREAM_OPS = ("subscribe", "unsubscribe")
 """Operations of a control connection itself (not run over MQTT): a stream of the boards."""
+
+
+class Writer(Protocol):
+    """Where a control connection's replies and stream go: an ``asyncio.StreamWriter`` (the
+    control socket), or the web dashboard's WebSocket (:mod:`omsd.web.server`). ``write``
+    takes whole JSON lines; ``drain`` waits until the peer has taken them."""
+
+    def write(self, data: bytes) -> None: ...
+
+    async def drain(self) -> None: ...
+
+    def is_closing(self) -> bool: ...
+
+    def close(self) -> None: ...
+
+
+READ_ONLY_OPS = ("boards", "state", "subscribe", "unsubscribe")
+"""What a watcher may ask (the web dashboard without ``control = true``)."""
 
 
 class ControlError(Exception):

@@ -22,7 +22,15 @@ from pathlib import Path
 from typing import Any
 
 from omsd.board.events import Event
-from omsd.control.protocol import MAX_LINE, OPS, STREAM_OPS, ControlError, decode, encode
+from omsd.control.protocol import (
+    MAX_LINE,
+    OPS,
+    STREAM_OPS,
+    ControlError,
+    Writer,
+    decode,
+    encode,
+)
 from omsd.control.watch import Subscription, options
 from omsd.faults import Faults
 from omsd.files import group_id
@@ -52,8 +60,8 @@ class ControlServer:
         self.servers: list[asyncio.Server] = []
         self.paths: list[Path] = []
         self._tasks: set[asyncio.Task[None]] = set()
-        self._writers: set[asyncio.StreamWriter] = set()
-        self.subscriptions: dict[asyncio.StreamWriter, Subscription] = {}
+        self._writers: set[Writer] = set()
+        self.subscriptions: dict[Writer, Subscription] = {}
 
     # -- listening ------------------------------------------------------------------------------
 
@@ -125,23 +133,51 @@ class ControlServer:
                     break
                 if not line.strip():
                     continue
-                task = asyncio.get_running_loop().create_task(self._request(line, writer, lock))
-                self._tasks.add(task)
-                task.add_done_callback(self._tasks.discard)
+                self.request(line, writer, lock)
         finally:
-            self._writers.discard(writer)
-            subscription = self.subscriptions.pop(writer, None)
-            if subscription is not None:
-                subscription.close_now()  # its sender ends at its next turn
-            writer.close()
+            self.forget(writer)
 
-    async def _request(self, line: bytes, writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
+    def request(
+        self,
+        line: bytes,
+        writer: Writer,
+        lock: asyncio.Lock,
+        allowed: tuple[str, ...] | None = None,
+    ) -> None:
+        """Answer one request line of a connection whose replies go to ``writer`` (under
+        ``lock``), as a task of its own; ``allowed``: the ops this connection may ask (any
+        other gets an error reply), ``None``: every op."""
+        self._writers.add(writer)
+        task = asyncio.get_running_loop().create_task(self._request(line, writer, lock, allowed))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def forget(self, writer: Writer) -> None:
+        """A connection has ended: its subscription, if any, ends, and its writer is closed."""
+        self._writers.discard(writer)
+        subscription = self.subscriptions.pop(writer, None)
+        if subscription is not None:
+            subscription.close_now()  # its sender ends at its next turn
+        writer.close()
+
+    async def _request(
+        self,
+        line: bytes,
+        writer: Writer,
+        lock: asyncio.Lock,
+        allowed: tuple[str, ...] | None = None,
+    ) -> None:
         ident: object = None
         subscription = None
         try:
             message = decode(line)
             ident = message.get("id")
             op = message.get("op")
+            if allowed is not None and op not in allowed:
+                raise ControlError(
+                    f"{op!r} is not allowed here: this connection may only watch"
+                    f" ({', '.join(allowed)})"
+                )
             if op == "subscribe":
                 subscription, result = self._subscribe(message, writer)
             elif op == "unsubscribe":
@@ -158,30 +194,34 @@ class ControlServer:
             subscription.start(writer, lock)  # the stream follows its snapshot
 
     def _subscribe(
-        self, message: dict[str, Any], writer: asyncio.StreamWriter
+        self, message: dict[str, Any], writer: Writer
     ) -> tuple[Subscription, dict[str, Any]]:
         """A subscription for this connection, and its snapshot."""
         if writer in self.subscriptions:
             raise ControlError("this connection has a subscription already (unsubscribe first)")
-        names, rate, traffic = options(message, list(self.services))
+        names, rate, traffic, rates = options(message, list(self.services))
         services = [self.services[name] for name in names]
         subscription = Subscription(
-            message.get("id"), services, self._state, self.log, rate=rate, traffic=traffic
+            message.get("id"),
+            services,
+            self._state,
+            self.log,
+            rate=rate,
+            traffic=traffic,
+            rates=rates,
         )
         self.subscriptions[writer] = subscription
         return subscription, subscription.snapshot(
             [b for b in self._boards() if b["name"] in names]
         )
 
-    async def _unsubscribe(self, writer: asyncio.StreamWriter) -> dict[str, Any]:
+    async def _unsubscribe(self, writer: Writer) -> dict[str, Any]:
         subscription = self.subscriptions.pop(writer, None)
         if subscription is None:
             raise ControlError("this connection has no subscription")
         return await subscription.close()
 
-    async def _send(
-        self, writer: asyncio.StreamWriter, lock: asyncio.Lock, reply: dict[str, Any]
-    ) -> None:
+    async def _send(self, writer: Writer, lock: asyncio.Lock, reply: dict[str, Any]) -> None:
         async with lock:
             if writer.is_closing():
                 return
@@ -269,7 +309,29 @@ class ControlServer:
             },
         }
         state["clients"] = [c.label for c in service.clients]
+        state["world"] = self._world(service)
         return state
+
+    @staticmethod
+    def _world(service: BoardService) -> dict[str, Any]:
+        """What the operations have done to the board's world and not undone: the switches
+        forced (``limits``: per axis [negative, positive], each true, false or null for "follows
+        the carriage"; ``home``: per axis true or false), the axes ``stalled``, the ``inputs``
+        driven (per bit, high or low). A page or a test shows a switch as forced, and lets it
+        follow the carriage again, from this."""
+        board = service.board
+        world = board.world
+        letter = {a.index: a.letter for a in board.axes}
+        return {
+            "limits": {
+                letter[i]: list(pair)
+                for i, pair in sorted(world.forced_limits.items())
+                if pair[0] is not None or pair[1] is not None
+            },
+            "home": {letter[i]: active for i, active in sorted(world.forced_home.items())},
+            "stalled": [a.letter for a in board.axes if a.stall_phys is not None],
+            "inputs": {str(bit): high for bit, high in sorted(world.input_levels.items())},
+        }
 
     def _op_state(self, service: BoardService, m: dict[str, Any]) -> Any:
         return self._state(service)

@@ -44,7 +44,7 @@ from omsd.board.events import (
     describe,
 )
 from omsd.board.world import AxisWorld
-from omsd.control.protocol import DEFAULT_RATE, MAX_RATE, ControlError, encode
+from omsd.control.protocol import DEFAULT_RATE, MAX_RATE, ControlError, Writer, encode
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Direction, Traffic, TrafficLog
 
@@ -98,9 +98,37 @@ def travel(service: BoardService) -> dict[str, list[float]]:
     return out
 
 
-def options(message: dict[str, Any], names: Sequence[str]) -> tuple[list[str], float, bool | str]:
-    """A ``subscribe`` request's boards (every board of ``names`` unless it says), rate and
-    traffic; :class:`ControlError` for a bad one."""
+def switches(service: BoardService) -> dict[str, dict[str, list[float]]]:
+    """Per axis, where its switches are (in steps of the carriage from where it was at
+    power-up, the frame of the state's ``physical``): ``home`` [low, high] always, ``limits``
+    [negative, positive] when the configuration places them (not the far defaults)."""
+    out: dict[str, dict[str, list[float]]] = {}
+    far = travel(service)
+    for axis in service.board.axes:
+        world = service.config.world.get(axis.letter, AxisWorld())
+        entry = {"home": [world.home_low, world.home_high]}
+        if axis.letter in far:
+            entry["limits"] = far[axis.letter]
+        out[axis.letter] = entry
+    return out
+
+
+def _rate(value: Any, key: str) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not 0 < value <= MAX_RATE
+        or not math.isfinite(value)
+    ):
+        raise ControlError(f"{key}: expected messages a second above 0, at most {MAX_RATE:g}")
+    return float(value)
+
+
+def options(
+    message: dict[str, Any], names: Sequence[str]
+) -> tuple[list[str], float, bool | str, dict[str, float]]:
+    """A ``subscribe`` request's boards (every board of ``names`` unless it says), rate,
+    traffic and per-board rates; :class:`ControlError` for a bad one."""
     wanted = message.get("boards")
     if wanted is None and message.get("board") is not None:
         wanted = [message["board"]]
@@ -113,21 +141,22 @@ def options(message: dict[str, Any], names: Sequence[str]) -> tuple[list[str], f
         boards = list(dict.fromkeys(wanted))
     else:
         raise ControlError(f"boards: expected a list of board names, got {wanted!r}")
-    rate = message.get("rate", DEFAULT_RATE)
-    if (
-        isinstance(rate, bool)
-        or not isinstance(rate, int | float)
-        or not 0 < rate <= MAX_RATE
-        or not math.isfinite(rate)
-    ):
-        raise ControlError(f"rate: expected messages a second above 0, at most {MAX_RATE:g}")
+    rate = _rate(message.get("rate", DEFAULT_RATE), "rate")
+    given = message.get("rates", {})
+    if not isinstance(given, dict):
+        raise ControlError(f"rates: expected an object of board names and rates, got {given!r}")
+    rates = {}
+    for name, value in given.items():
+        if name not in boards:
+            raise ControlError(f"rates: no board {name!r} in this subscription")
+        rates[name] = _rate(value, f"rates.{name}")
     traffic = message.get("traffic", False)
     if not isinstance(traffic, bool) and traffic not in boards:
         raise ControlError(
             f"traffic: expected true, false or a board's name ({', '.join(boards)}),"
             f" got {traffic!r}"
         )
-    return boards, float(rate), traffic
+    return boards, rate, traffic, rates
 
 
 class Outbox:
@@ -263,13 +292,21 @@ class Subscription:
         rate: float,
         traffic: bool | str = False,
         outbox: Outbox | None = None,
+        rates: dict[str, float] | None = None,
     ) -> None:
         self.ident = ident
         self.services = {s.name: s for s in services}
         self.state_of = state
         self.log = log
         self.rate = rate
-        self.period = 1.0 / rate
+        self.rates = dict(rates or {})
+        # each board's period (``rates`` for the boards it names, else ``rate``) and when it
+        # was last looked at: a board is looked at no more often than its own rate
+        self.periods = {name: 1.0 / self.rates.get(name, rate) for name in self.services}
+        self.seen = dict.fromkeys(self.services, -math.inf)  # loop time of each board's look
+        # and looks no closer together than the fastest rate: a slow board due between two
+        # looks of a fast one waits for the next (messages: at most the fastest rate a second)
+        self.gap = 1.0 / max([rate, *self.rates.values()])
         self.chunks = traffic  # which boards' chunks are sent
         self.outbox = outbox if outbox is not None else Outbox()
         self.loop = asyncio.get_running_loop()
@@ -316,7 +353,11 @@ class Subscription:
         """Look at the boards as soon as the rate allows."""
         if self.timer is not None or self.closed:
             return
-        at = max(self.loop.time(), self.last_look + self.period)
+        pending = self.changed_boards | self.moving
+        if not pending:
+            return
+        due = min(self.seen[name] + self.periods[name] for name in pending)
+        at = max(self.loop.time(), due, self.last_look + self.gap)
         self.timer = self.loop.call_at(at, self.look)
 
     # -- looking ----------------------------------------------------------------------------
@@ -330,11 +371,19 @@ class Subscription:
             service = self.services[entry["name"]]
             state = self.state_of(service)
             self.last[service.name] = self._key(state)
-            out.append({**entry, "travel": travel(service), "state": state})
+            out.append(
+                {
+                    **entry,
+                    "travel": travel(service),
+                    "switches": switches(service),
+                    "state": state,
+                }
+            )
         return {
             "kind": "snapshot",
             "t": time.time(),
             "rate": self.rate,
+            "rates": self.rates,
             "traffic": self.chunks,
             "boards": out,
         }
@@ -352,13 +401,20 @@ class Subscription:
         self.timer = None
         if self.closed:
             return
-        self.last_look = self.loop.time()
+        now = self.last_look = self.loop.time()
         self.looks += 1
-        names = [n for n in self.services if n in self.changed_boards or n in self.moving]
-        self.changed_boards.clear()
-        moving = set()
+        pending = self.changed_boards | self.moving
+        # the boards due (a millisecond early is on time: the timer was armed for the first)
+        names = [
+            n
+            for n in self.services
+            if n in pending and now >= self.seen[n] + self.periods[n] - 1e-3
+        ]
+        self.changed_boards -= set(names)
+        moving = self.moving - set(names)  # those not due are still moving as far as is known
         boards: dict[str, dict[str, Any]] = {}
         for name in names:
+            self.seen[name] = now
             service = self.services[name]
             try:
                 state = self.state_of(service)
@@ -376,13 +432,13 @@ class Subscription:
         self.moving = moving
         counts = {}
         for name, (sent_in, sent_out) in self.totals.items():
-            now = (sent_in, sent_out)
-            if self.sent_totals.get(name, (0, 0)) != now:
-                self.sent_totals[name] = now
+            sent = (sent_in, sent_out)
+            if self.sent_totals.get(name, (0, 0)) != sent:
+                self.sent_totals[name] = sent
                 counts[name] = {"in": sent_in, "out": sent_out}
         if boards or counts:
             self.outbox.put_state(boards, counts, time.time())
-        if moving:
+        if moving or self.changed_boards:
             self.arm()  # a move runs without waking its board: look again at the rate
 
     def _changes(self, name: str, state: dict[str, Any]) -> dict[str, Any]:
@@ -429,11 +485,11 @@ class Subscription:
             out["dropped"] = dict(self.outbox.dropped)
         return out
 
-    def start(self, writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
+    def start(self, writer: Writer, lock: asyncio.Lock) -> None:
         """Send what is queued, and what comes, on ``writer`` (after the snapshot's reply)."""
         self.sender = self.loop.create_task(self._send(writer, lock), name="control subscription")
 
-    async def _send(self, writer: asyncio.StreamWriter, lock: asyncio.Lock) -> None:
+    async def _send(self, writer: Writer, lock: asyncio.Lock) -> None:
         outbox = self.outbox
         while not self.closed:
             batch: list[bytes] = []
@@ -490,5 +546,6 @@ __all__ = [
     "Subscription",
     "event_record",
     "options",
+    "switches",
     "travel",
 ]

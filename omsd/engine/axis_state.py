@@ -282,14 +282,16 @@ class AxisState:
 
     # -- switches -----------------------------------------------------------------------------
 
-    def limit_active(self, direction: int, t: float) -> bool:
+    def limit_active(self, direction: int, t: float, carriage: float | None = None) -> bool:
+        """The limit input in ``direction``; ``carriage``: :meth:`carriage` at ``t`` if the
+        caller has it already (a snapshot asks for both limits and home at one instant)."""
         if self.travel_limits is not None and self.beyond_travel_limit(direction, t):
             return True  # soft travel limits flag a limit just as the switches would
         forced = self.host.world.forced_limit(self.index, direction)
         if forced is not None:
             hit = forced
         else:
-            p = self.carriage(t)
+            p = self.carriage(t) if carriage is None else carriage
             w = self.world
             hit = p >= w.positive_limit if direction > 0 else p <= w.negative_limit
         wiring = self.world.limit_switches
@@ -315,21 +317,22 @@ class AxisState:
         position = self.counter(t)
         return position > upper if direction > 0 else position < lower
 
-    def home_switch_activated(self, t: float) -> bool:
+    def home_switch_activated(self, t: float, carriage: float | None = None) -> bool:
         forced = self.host.world.forced_home.get(self.index)
         if forced is not None:
             return forced
-        return self.world.home_low <= self.carriage(t) < self.world.home_high
+        p = self.carriage(t) if carriage is None else carriage
+        return self.world.home_low <= p < self.world.home_high
 
-    def home_line_low(self, t: float) -> bool:
-        activated = self.home_switch_activated(t)
+    def home_line_low(self, t: float, carriage: float | None = None) -> bool:
+        activated = self.home_switch_activated(t, carriage)
         if self.world.home_switch is _SWITCH_NORMALLY_OPEN:
             return activated
         return not activated
 
-    def home_sensed(self, t: float) -> bool:
+    def home_sensed(self, t: float, carriage: float | None = None) -> bool:
         """The home input after the active-high/low sense: what a status reports as home."""
-        return self.home_line_low(t) != self.home_high
+        return self.home_line_low(t, carriage) != self.home_high
 
     def encoder_home(self, t: float) -> bool:
         """Encoder home mode (PC48 §6.18): index AND quadrant AND the low-true home enable."""

@@ -1,0 +1,235 @@
+"""The web dashboard's server (issue 18): one page, its files, and a WebSocket that speaks the
+control protocol.
+
+Off unless configured (``[web]``, ``--web``). It serves:
+
+* ``/``: the page (``static/index.html``); its script, styles and the vendored uPlot under
+  ``/static/`` (package data: no CDN, no build step);
+* ``/ws``: a WebSocket on which the page is a control connection like ``omsd ctl``'s
+  (:mod:`omsd.control.protocol`): each text frame from the page is one request, each frame to
+  it one or more JSON lines (replies, and the ``subscribe`` stream of
+  :mod:`omsd.control.watch`, bounded as it is for the socket). The first frame says what the
+  page may do: ``{"kind": "hello", "control": false, "version": "0.1.0", "boards": [...]}``.
+  Without ``control = true`` only the ops of :data:`omsd.control.protocol.READ_ONLY_OPS` are
+  answered (the others get an error reply).
+
+Guards. The server listens on loopback unless another address is configured, and a token is
+then required (the configuration refuses one without). With a token, ``/`` and ``/ws`` answer
+only a request that gives it (``?token=...``; compared in constant time); the page passes it on
+to its WebSocket. ``/ws`` also refuses a request whose ``Origin`` is not the page's own (another
+site open in the same browser must not drive the boards), and on loopback one whose ``Host`` is
+not a loopback name (DNS rebinding). Everything refused gets a one-line reason.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import hmac
+import importlib.resources
+import json
+from urllib.parse import urlsplit
+
+from aiohttp import WSMsgType, web
+
+from omsd.config import WebConfig, is_loopback
+from omsd.control.protocol import MAX_LINE, READ_ONLY_OPS
+from omsd.control.server import ControlServer
+from omsd.telemetry.traffic import TrafficLog
+
+STATIC = importlib.resources.files("omsd.web") / "static"
+"""The page's files (package data)."""
+
+POLICY = (
+    "default-src 'self'; connect-src 'self'; img-src 'self' data:; style-src 'self';"
+    " script-src 'self'; object-src 'none'; base-uri 'none'; frame-ancestors 'none'"
+)
+"""The page's Content-Security-Policy: its own files only (no inline script, nothing from
+elsewhere), and not to be framed by another site."""
+
+COALESCE = 0.05
+"""Seconds what is written to a page may wait for more to go with it in one frame."""
+
+COALESCE_BYTES = 64 * 1024
+"""Bytes waiting for a page above which they go at once, and its writers wait for them."""
+
+HEARTBEAT = 20.0
+"""Seconds between WebSocket pings: a page that has gone (a laptop closed) is noticed."""
+
+
+class SocketWriter:
+    """A control connection's :class:`omsd.control.protocol.Writer` on a WebSocket.
+
+    What is written goes out in one text frame at most :data:`COALESCE` seconds later, with
+    whatever else was written meanwhile: a page that watches 8 moving boards would otherwise get
+    a frame, a send and a wake-up of the browser for every event and every chunk of traffic
+    (some 35 a second in ``bench/web.py``; coalesced, at most 20). ``drain`` waits only when
+    :data:`COALESCE_BYTES` are waiting (or a frame is on its way and more than that is): a page
+    that reads slowly holds up its own subscription, whose queue is bounded
+    (:mod:`omsd.control.watch`), and nothing else."""
+
+    def __init__(self, socket: web.WebSocketResponse) -> None:
+        self.socket = socket
+        self._pending: list[bytes] = []
+        self._size = 0
+        self._flushing: asyncio.Task[None] | None = None
+
+    def write(self, data: bytes) -> None:
+        self._pending.append(data)
+        self._size += len(data)
+
+    async def drain(self) -> None:
+        if not self._pending or self.socket.closed:
+            return
+        if self._flushing is None or self._flushing.done():
+            self._flushing = asyncio.get_running_loop().create_task(self._flush())
+        if self._size >= COALESCE_BYTES:
+            await asyncio.shield(self._flushing)
+
+    async def _flush(self) -> None:
+        if self._size < COALESCE_BYTES:
+            await asyncio.sleep(COALESCE)
+        try:
+            while self._pending and not self.socket.closed:
+                data = b"".join(self._pending)
+                self._pending.clear()
+                self._size = 0
+                # send_str waits while the transport is above its high-water mark
+                await self.socket.send_str(data.decode())
+        except (ConnectionError, RuntimeError):
+            self._pending.clear()  # the page has gone: the handler's loop ends and cleans up
+            self._size = 0
+
+    def is_closing(self) -> bool:
+        return self.socket.closed
+
+    def close(self) -> None:
+        self._pending.clear()
+        self._size = 0
+        if self._flushing is not None:
+            self._flushing.cancel()
+
+
+class WebServer:
+    """The dashboard for the boards of ``control`` (the daemon's own control server: the page's
+    requests are its operations)."""
+
+    def __init__(
+        self, config: WebConfig, control: ControlServer, log: TrafficLog, version: str
+    ) -> None:
+        self.config = config
+        self.control = control
+        self.log = log
+        self.version = version
+        self.runner: web.AppRunner | None = None
+        self.sockets: set[web.WebSocketResponse] = set()
+        self.address: tuple[str, int] | None = None
+
+    async def start(self) -> tuple[str, int]:
+        """Listen; returns the host and port (the port the system chose for port 0). An
+        address that cannot be used raises ``OSError``."""
+        app = web.Application(client_max_size=MAX_LINE)
+        app.router.add_get("/", self._page)
+        app.router.add_get("/ws", self._socket)
+        app.router.add_static("/static/", str(STATIC), follow_symlinks=False)
+        runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        await runner.setup()
+        self.runner = runner
+        site = web.TCPSite(runner, self.config.listen.host, self.config.listen.port)
+        try:
+            await site.start()
+        except BaseException:
+            await self.close()
+            raise
+        server = site._server
+        assert isinstance(server, asyncio.Server)
+        host, port = server.sockets[0].getsockname()[:2]
+        self.address = (host, port)
+        return host, port
+
+    async def close(self) -> None:
+        for socket in list(self.sockets):
+            with contextlib.suppress(Exception):
+                await socket.close()
+        runner, self.runner = self.runner, None
+        if runner is not None:
+            await runner.cleanup()
+
+    # -- guards ---------------------------------------------------------------------------------
+
+    def _refusal(self, request: web.Request, websocket: bool) -> str | None:
+        """Why ``request`` is refused, or None."""
+        token = self.config.token
+        if token is not None:
+            given = request.query.get("token", "")
+            if not hmac.compare_digest(given.encode(), token.encode()):
+                return "this dashboard needs its token: open it as /?token=..."
+        if self.config.loopback:
+            host = urlsplit(f"//{request.host}").hostname or ""
+            if not is_loopback(host):
+                return f"Host {request.host!r} is not this machine (the dashboard is on loopback)"
+        if websocket:
+            origin = request.headers.get("Origin")
+            if origin is not None and urlsplit(origin).netloc != request.host:
+                return f"Origin {origin!r} is not this dashboard's"
+        return None
+
+    # -- handlers -------------------------------------------------------------------------------
+
+    async def _page(self, request: web.Request) -> web.StreamResponse:
+        refusal = self._refusal(request, websocket=False)
+        if refusal is not None:
+            return web.Response(status=403, text=f"omsd: {refusal}\n")
+        page = (STATIC / "index.html").read_bytes()
+        return web.Response(
+            body=page,
+            content_type="text/html",
+            charset="utf-8",
+            headers={
+                "Cache-Control": "no-store",
+                "Content-Security-Policy": POLICY,
+                "X-Content-Type-Options": "nosniff",
+                "Referrer-Policy": "no-referrer",
+            },
+        )
+
+    async def _socket(self, request: web.Request) -> web.StreamResponse:
+        refusal = self._refusal(request, websocket=True)
+        if refusal is not None:
+            return web.Response(status=403, text=f"omsd: {refusal}\n")
+        # no permessage-deflate: the page is near (loopback, a LAN), and compressing every frame
+        # would cost the daemon more than the bytes it saves
+        socket = web.WebSocketResponse(heartbeat=HEARTBEAT, max_msg_size=MAX_LINE, compress=False)
+        await socket.prepare(request)
+        self.sockets.add(socket)
+        writer = SocketWriter(socket)
+        lock = asyncio.Lock()
+        allowed = None if self.config.control else READ_ONLY_OPS
+        try:
+            hello = {
+                "kind": "hello",
+                "control": self.config.control,
+                "version": self.version,
+                "boards": list(self.control.services),
+            }
+            async with lock:
+                await socket.send_str(json.dumps(hello) + "\n")
+            async for message in socket:
+                if message.type is WSMsgType.TEXT:
+                    line = message.data.encode()
+                    if line.strip():
+                        self.control.request(line, writer, lock, allowed)
+                elif message.type is WSMsgType.ERROR:
+                    break
+                # binary frames are not the protocol's: ignored
+        except ConnectionError:
+            pass
+        finally:
+            self.sockets.discard(socket)
+            self.control.forget(writer)
+            with contextlib.suppress(Exception):
+                await socket.close()
+        return socket
+
+
+__all__ = ["STATIC", "SocketWriter", "WebServer"]
