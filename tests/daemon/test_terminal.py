@@ -187,9 +187,15 @@ def test_a_terminal_program_shows_what_is_typed_and_each_answer_on_its_own_line(
     _shows(tmux, ["AX MR1000 GO ID", "!01", "AX RP", "1000"])
     tmux.type("EN")
     tmux.keys("Enter")
+    # with the board's echo on, what shows is the board's echo: a person sees it come back
+    # before pressing Enter (pressed before the echo is back, the new line comes first and the
+    # late echo after it, as on the card through PC4XCOMM), so the test waits for it too
     tmux.type("WY")
+    _shows(tmux, ["EN", "WY"])
     tmux.keys("Enter")
+    _shows(tmux, ["EN", "WY", WY])
     tmux.type("XQ")
+    _shows(tmux, ["EN", "WY", WY, "XQ"])
     tmux.keys("Enter")
     _shows(tmux, ["EN", "WY", WY, "XQ", "Unrecognized command: XQ", "#"])
     terminal.quit()
