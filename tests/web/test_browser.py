@@ -452,6 +452,81 @@ def test_the_framing_marks_are_the_plain_views(driver: WebDriver, dashboard: Das
     assert dash(driver, "d.visible(arguments[0])", every.decode("latin-1")) == visible(every)
 
 
+def click(driver: WebDriver, selector: str) -> None:
+    driver.find_element(By.CSS_SELECTOR, selector).click()
+
+
+def fill(driver: WebDriver, selector: str, value: str) -> None:
+    field = driver.find_element(By.CSS_SELECTOR, selector)
+    field.clear()
+    field.send_keys(value)
+
+
+def test_every_button_does_what_omsd_ctl_does(driver: WebDriver, dashboard: Dashboard) -> None:
+    """The issue's list: a home switch, an input, a slip, a stall, the cable, the board's time
+    (pause, step, scale, resume) and a reset, each from its button, each seen in the state the
+    control API gives (the limit switches: the test above)."""
+    ctl = dashboard.control
+    assert ctl is not None
+    open_page(driver, dashboard.url)
+    select_board(driver, "xy")
+    park_x(dashboard)
+
+    def state() -> dict[str, Any]:
+        return ctl.state("xy")
+
+    def shows(selector: str, mark: str) -> bool:
+        classes = driver.find_element(By.CSS_SELECTOR, selector).get_attribute("class")
+        return mark in (classes or "").split()
+
+    home = 'button[data-op="home"][data-axis="X"]'
+    click(driver, home)  # X at 0 is in its home window: the click forces the switch open
+    within(lambda: state()["world"]["home"] == {"X": False}, WITHIN, "home forced open")
+    within(lambda: shows(home, "forced"), WITHIN, "the page shows the switch forced")
+    click(driver, home)  # a forced switch: the click lets it follow the carriage again
+    within(lambda: state()["world"]["home"] == {}, WITHIN, "home following the carriage")
+    fill(driver, "#input-bit", "3")
+    click(driver, 'button[data-op="input"][data-high="false"]')
+    within(lambda: state()["world"]["inputs"] == {"3": False}, WITHIN, "input 3 driven low")
+    click(driver, 'button[data-op="input"][data-high="null"]')
+    within(lambda: state()["world"]["inputs"] == {}, WITHIN, "input 3 released")
+    fill(driver, "#slip-steps", "25")
+    before = state()["axes"]["Y"]["physical"]
+    click(driver, 'button[data-op="slip"][data-axis="Y"]')
+    within(lambda: state()["axes"]["Y"]["physical"] == before + 25, WITHIN, "Y slipped 25")
+    click(driver, 'button[data-op="stall"][data-axis="Z"]')
+    within(lambda: state()["world"]["stalled"] == ["Z"], WITHIN, "Z stalled")
+    stall = 'button[data-op="stall"][data-axis="Z"]'
+    within(lambda: shows(stall, "active"), WITHIN, "the stall button shows it")
+    click(driver, 'button[data-op="stall"][data-axis="Z"]')
+    within(lambda: state()["world"]["stalled"] == [], WITHIN, "Z running again")
+    click(driver, 'button[data-op="cable"]')
+    within(lambda: state()["faults"]["cable"] is False, WITHIN, "cable cut")
+    within(lambda: dash(driver, "d.boards.xy.faults.cable") is False, WITHIN, "shown cut")
+    click(driver, 'button[data-op="cable"]')
+    within(lambda: state()["faults"]["cable"] is True, WITHIN, "cable restored")
+    click(driver, 'button[data-op="time"][data-action="pause"]')
+    within(lambda: state()["clock"]["paused"] is True, WITHIN, "time paused")
+    paused_at = state()["time"]
+    fill(driver, "#time-step", "0.5")
+    click(driver, 'button[data-op="time"][data-action="step"]')
+    within(lambda: abs(state()["time"] - paused_at - 0.5) < 1e-6, WITHIN, "stepped 0.5 s")
+    fill(driver, "#time-scale", "2")
+    click(driver, 'button[data-op="time"][data-action="scale"]')
+    within(lambda: state()["clock"].get("scale") == 2.0, WITHIN, "time scaled by 2")
+    fill(driver, "#time-scale", "1")
+    click(driver, 'button[data-op="time"][data-action="scale"]')
+    click(driver, 'button[data-op="time"][data-action="resume"]')
+    within(lambda: state()["clock"]["paused"] is False, WITHIN, "time running again")
+    within(lambda: state()["clock"].get("scale") == 1.0, WITHIN, "time at its own pace")
+    with dashboard.board("xy") as conn:
+        conn.send(b"AY LP40\r")  # something a reset forgets
+        within(lambda: state()["axes"]["Y"]["position"] == 40, 5.0, "Y's counter at 40")
+    click(driver, 'button[data-op="reset"]')
+    within(lambda: state()["axes"]["Y"]["position"] == 0, WITHIN, "the board reset")
+    assert "not connected" not in driver.find_element(By.CSS_SELECTOR, "#error").text
+
+
 def test_a_read_only_dashboard_has_no_buttons_and_refuses_operations(
     driver: WebDriver, daemons: Omsd
 ) -> None:
