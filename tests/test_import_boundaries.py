@@ -95,3 +95,24 @@ def test_the_defaults_are_the_configurations() -> None:
     for name in set(defaults.__all__) & set(omsd.config.__all__):
         assert getattr(omsd.config, name) is getattr(defaults, name), name
     assert defaults.LINKS == omsd.link.KINDS
+
+
+def test_a_board_loads_only_its_own_dialect() -> None:
+    """Dialects are imported when a board first looks theirs up (``omsd.dialects.registry``):
+    a daemon of PC48-family boards never loads the PCIx's language (start-up), and a PCIx board
+    loads it."""
+    code = (
+        "import sys\n"
+        "from omsd.board import Board\nfrom omsd.models import get_model\n"
+        "import omsd.daemon\n"
+        "def has(name): return name in sys.modules\n"
+        "before = has('omsd.dialects.pc48'), has('omsd.dialects.pcix')\n"
+        "Board(get_model('PC48-4E'), now=0.0); Board(get_model('VS4-040'), now=0.0)\n"
+        "family = has('omsd.dialects.pc48'), has('omsd.dialects.pcix')\n"
+        "Board(get_model('PCIX-400'), now=0.0)\n"
+        "print(before, family, has('omsd.dialects.pcix'))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=True
+    )
+    assert done.stdout.split("\n")[0] == "(False, False) (True, False) True"

@@ -8,15 +8,16 @@
 * :mod:`~omsd.dialects.pc48`: the PC48 family's language (PC48, PC46, VS4);
 * :mod:`~omsd.dialects.pcix`: the PCIx's, with the MAX-family queries.
 
-Importing this package registers both dialects.
+A dialect is imported, and registers itself, when it is first looked up (:func:`lookup`,
+:func:`registered` for all of them).
 """
 
-from omsd.dialects import pc48, pcix
 from omsd.dialects.registry import (
     Dialect,
     commands,
     framing,
     handlers,
+    known,
     lookup,
     prefixes,
     ranges,
@@ -24,14 +25,16 @@ from omsd.dialects.registry import (
     registered,
 )
 
+known("oms", "omsd.dialects.pc48", framing_name="surround")
+known("pcix", "omsd.dialects.pcix", framing_name="trailing")
+
 __all__ = [
     "Dialect",
     "commands",
     "framing",
     "handlers",
+    "known",
     "lookup",
-    "pc48",
-    "pcix",
     "prefixes",
     "ranges",
     "register",

@@ -10,6 +10,7 @@ the model row's dialect up (:func:`lookup`) and joins the three in ``Board(...)`
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -53,6 +54,19 @@ class Dialect:
 
 _DIALECTS: dict[str, Dialect] = {}
 
+#: Where each dialect is (:func:`known`), imported (and so registered) when it is first looked
+#: up: a daemon of PC48-family boards never loads the PCIx's language (start-up, issue 16).
+#: ``_FRAMINGS``: the dialect whose framing each framing name is.
+_MODULES: dict[str, str] = {}
+_FRAMINGS: dict[str, str] = {}
+
+
+def known(name: str, module: str, framing_name: str) -> None:
+    """Dialect ``name`` is in ``module`` (which registers it when imported), and its framing is
+    the one model rows call ``framing_name``."""
+    _MODULES[name] = module
+    _FRAMINGS[framing_name] = name
+
 
 def register(dialect: Dialect) -> Dialect:
     _DIALECTS[dialect.name] = dialect
@@ -60,14 +74,20 @@ def register(dialect: Dialect) -> Dialect:
 
 
 def lookup(name: str) -> Dialect:
-    try:
-        return _DIALECTS[name]
-    except KeyError:
-        known = ", ".join(sorted(_DIALECTS))
-        raise KeyError(f"no dialect {name!r} (known: {known})") from None
+    found = _DIALECTS.get(name)
+    if found is None and name in _MODULES:
+        importlib.import_module(_MODULES[name])
+        found = _DIALECTS.get(name)
+    if found is None:
+        known = ", ".join(sorted(_MODULES))
+        raise KeyError(f"no dialect {name!r} (known: {known})")
+    return found
 
 
 def registered() -> list[str]:
+    """Every dialect (each imported, if it was not yet)."""
+    for name in _MODULES:
+        lookup(name)
     return sorted(_DIALECTS)
 
 
@@ -88,10 +108,12 @@ def ranges(model: Model) -> RangeTable:
 def framing(model: Model) -> Framing:
     """The framing the model row names: the framing of the dialect whose framing it is (a row
     may name another dialect's: a PC48 presented as the MAX family presents it)."""
-    for dialect in _DIALECTS.values():
-        if dialect.framing_name == model.framing:
-            return dialect.framing
-    raise KeyError(f"no framing {model.framing!r}")
+    name = _FRAMINGS.get(model.framing)
+    if name is None:
+        raise KeyError(f"no framing {model.framing!r}")
+    dialect = lookup(name)
+    assert dialect.framing_name == model.framing, (dialect.name, model.framing)
+    return dialect.framing
 
 
 def prefixes(table: Mapping[str, CommandSpec] | Sequence[str]) -> frozenset[str]:
