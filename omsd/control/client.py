@@ -128,15 +128,18 @@ class Control:
         rate: float = DEFAULT_RATE,
         traffic: bool | str = False,
         timeout: float | None = None,
+        rates: dict[str, float] | None = None,
     ) -> Subscription:
         """The boards' life as a stream (every board unless ``board`` or ``boards`` says): the
         snapshot (:attr:`Subscription.snapshot`), then, iterating, each message: ``state``
-        changes at most ``rate`` times a second, ``event`` as they happen, ``traffic`` chunks
-        with ``traffic`` true (or a board's name). ``timeout``: seconds an iteration waits for a
-        message before :class:`TimeoutError` (None: as long as it takes; an idle daemon sends
-        nothing)."""
+        changes at most ``rate`` times a second (``rates``: a rate of their own for the boards
+        it names), ``event`` as they happen, ``traffic`` chunks with ``traffic`` true (or a
+        board's name). ``timeout``: seconds an iteration waits for a message before
+        :class:`TimeoutError` (None: as long as it takes; an idle daemon sends nothing)."""
         ident = next(self._ids)
         request: dict[str, Any] = {"id": ident, "op": "subscribe", "rate": rate}
+        if rates:
+            request["rates"] = rates
         if boards is not None:
             request["boards"] = boards
         elif board is not None:

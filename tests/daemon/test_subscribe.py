@@ -124,3 +124,22 @@ def test_a_subscriber_that_does_not_read_holds_up_nobody(lab: tuple[Daemon, Path
         stats = watch.close()
         assert stats is not None and stats["dropped"]["traffic"] >= dropped["traffic"]
         assert stats["peak"] <= 1000
+
+
+def test_a_board_of_its_own_rate(lab: tuple[Daemon, Path]) -> None:
+    """``rates``: the board a view shows in detail at its rate, the others at ``rate`` (the web
+    dashboard asks 12 and 2); the snapshot says so."""
+    daemon, socket = lab
+    with Control(socket, timeout=TIMEOUT) as ctl, daemon.connect("xy") as board:
+        watch = ctl.subscribe(rate=2, rates={"xy": 20}, timeout=TIMEOUT)
+        assert (watch.snapshot["rate"], watch.snapshot["rates"]) == (2.0, {"xy": 20.0})
+        board.send(b"AX VL1000 JG1000;")
+        start = time.monotonic()
+        looks = 0
+        while time.monotonic() - start < 1.0:
+            message = watch.read(0.5)
+            if message is not None and message["kind"] == "state" and "xy" in message["boards"]:
+                looks += 1
+        assert looks >= 12, looks  # 20 a second asked; not the 2 of the others
+        board.send(b"AX ST;")
+        watch.close()
