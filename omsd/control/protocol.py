@@ -29,9 +29,10 @@ wait       board, until: done / idle / position, axis, position (with until     
 ========== ========================================================================= =========
 
 A board's state (``state``, the snapshot's) is the engine's (``omsd.board.Board.snapshot``)
-with the board's ``clock``, ``faults``, ``link``, ``clients``, and ``world``: what the
-operations have forced and not released (``limits``: per axis [negative, positive], each true,
-false or null; ``home``: per axis; ``stalled``: the axes; ``inputs``: per bit).
+with the board's ``clock``, ``faults``, ``link``, ``clients``, and ``world``: what is done to
+its world from outside and not undone (``limits``: per axis [negative, positive], each true,
+false or null; ``home``: per axis; ``stalled``: the axes; ``inputs``: per bit, driven by the
+configuration's ``inputs`` or an ``input`` operation).
 
 Streams (:mod:`omsd.control.watch`): ``subscribe`` turns the connection into a stream of the
 boards' life. Its arguments: ``boards`` (a list of names; default every board; ``board`` names

@@ -508,7 +508,11 @@
     const clock = state.clock || {};
     const faults = state.faults || {};
     const parts = [entry.model, entry.link];
-    if (typeof state.time === "number") parts.push(`board time ${state.time.toFixed(2)} s`);
+    if (typeof state.time === "number") {
+      // the board's clock counts from the machine's boot (monotonic); since power-up reads better
+      const origin = state.clock && typeof state.clock.origin === "number" ? state.clock.origin : 0;
+      parts.push(`${(state.time - origin).toFixed(2)} s since power-up`);
+    }
     parts.push(clock.paused ? "clock paused" : `time ×${clock.scale ?? 1}`);
     if (faults.cable === false) parts.push("CABLE CUT");
     if (state.link && state.link.held) parts.push(`held: ${state.link.held.text}`);
