@@ -317,8 +317,9 @@ class ControlServer:
         """What is done to the board's world from outside and not undone: the switches forced
         (``limits``: per axis [negative, positive], each true, false or null for "follows the
         carriage"; ``home``: per axis true or false), the axes ``stalled``, the ``inputs``
-        driven (per bit, high or low: by the configuration's ``inputs`` or an operation). A page or a test shows a switch as forced, and lets it
-        follow the carriage again, from this."""
+        driven (per bit, high or low: by the configuration's ``inputs`` or an operation). A
+        page or a test shows a switch as forced, and lets it follow the carriage again, from
+        this."""
         board = service.board
         world = board.world
         letter = {a.index: a.letter for a in board.axes}
