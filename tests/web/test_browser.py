@@ -480,7 +480,14 @@ def test_every_button_does_what_omsd_ctl_does(driver: WebDriver, dashboard: Dash
         return mark in (classes or "").split()
 
     home = 'button[data-op="home"][data-axis="X"]'
-    click(driver, home)  # X at 0 is in its home window: the click forces the switch open
+    # the page has seen X parked at 0, in its home window (0...100): the switch reads closed
+    # there, so the click forces it open
+    within(
+        lambda: dash(driver, "[d.boards.xy.axes.X.position, d.boards.xy.axes.X.home]") == [0, True],
+        WITHIN,
+        "the page shows X at 0 on its home switch",
+    )
+    click(driver, home)
     within(lambda: state()["world"]["home"] == {"X": False}, WITHIN, "home forced open")
     within(lambda: shows(home, "forced"), WITHIN, "the page shows the switch forced")
     click(driver, home)  # a forced switch: the click lets it follow the carriage again
