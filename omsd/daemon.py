@@ -144,7 +144,6 @@ class Daemon:
         self.control: ControlServer | None = None
         self.mqtt: MqttBridge | None = None
         self.web: WebServer | None = None
-        self._web_control: ControlServer | None = None
 
     async def start(self) -> list[Endpoint]:
         # A fast path (issue 16: 1,000 boards ready within 2 s): a board is some thousand
@@ -396,7 +395,6 @@ class Daemon:
                 f"cannot serve the web dashboard on {config.listen}: {reason.lower()}"
             ) from None
         self.web = web
-        self._web_control = control
         shown = f"[{host}]" if ":" in host else host
         what = "control" if config.control else "read-only"
         token = "?token=..." if config.token is not None else ""
@@ -485,9 +483,6 @@ class Daemon:
         if self.web is not None:
             await self.web.close()
             self.web = None
-        if self._web_control is not None:
-            await self._web_control.close()
-            self._web_control = None
         if self.control is not None:
             await self.control.close()
             self.control = None

@@ -111,8 +111,9 @@ class SocketWriter:
 
 
 class WebServer:
-    """The dashboard for the boards of ``control`` (the daemon's own control server: the page's
-    requests are its operations)."""
+    """The dashboard for the boards of ``control``: the page's requests are its operations and
+    its subscriptions. The daemon gives the dashboard a control server of its own, which
+    :meth:`close` closes."""
 
     def __init__(
         self, config: WebConfig, control: ControlServer, log: TrafficLog, version: str
@@ -154,6 +155,7 @@ class WebServer:
         runner, self.runner = self.runner, None
         if runner is not None:
             await runner.cleanup()
+        await self.control.close()  # the dashboard's own control server: its subscriptions
 
     # -- guards ---------------------------------------------------------------------------------
 

@@ -287,8 +287,8 @@ async def test_a_page_that_goes_leaves_nothing_behind(tmp_path: Path) -> None:
             async with page(dash) as p:
                 await p.next()
                 await p.ask("subscribe", traffic=True)
-                web_control = dash.daemon._web_control
-                assert web_control is not None and len(web_control.subscriptions) == 1
+                web_control = dash.web.control
+                assert len(web_control.subscriptions) == 1
         deadline = time.monotonic() + WAIT
         while web_control.subscriptions or dash.web.sockets:
             assert time.monotonic() < deadline, "a gone page's subscription is still there"
