@@ -8,7 +8,9 @@ without a timer.
 
 Identical events that follow each other unread are merged by the kernel ("coalesced"), so two
 programs opening the pty in the same instant may be reported as one open; the caller checks
-its count against POLLHUP where it matters.
+its count against POLLHUP where it matters. A close is reported as one of two kinds (a
+descriptor that could write, or one that could only read): events of different kinds are never
+merged, which lets the pty endpoint tell its own read-only flush from its clients.
 
 The standard library has no inotify; this is the three calls it needs, through ``ctypes``. Where
 they are missing (not Linux) :func:`watch_opens` returns ``None`` and the caller does without.
@@ -30,13 +32,18 @@ IN_CLOSE_NOWRITE = 0x00000010
 IN_OPEN = 0x00000020
 OPENED = "open"
 CLOSED = "close"
+#: A close of a descriptor opened without write access (IN_CLOSE_NOWRITE): a reader such as
+#: ``cat``, or the pty endpoint's own moment on the slave to flush it. Reported apart so that
+#: it is never merged with a close of a program that opened the pty to write (IN_CLOSE_WRITE).
+CLOSED_READER = "close-reader"
 _EVENT = struct.Struct("iIII")  # wd, mask, cookie, len (then len bytes of name)
 _MASK = IN_OPEN | IN_CLOSE_WRITE | IN_CLOSE_NOWRITE
 
 
 class OpenWatch:
     """Calls ``on_events`` (from the event loop's reader, or :meth:`drain`) with the opens and
-    closes of the watched file since the last call, in order (:data:`OPENED`, :data:`CLOSED`)."""
+    closes of the watched file since the last call, in order (:data:`OPENED`, :data:`CLOSED`,
+    :data:`CLOSED_READER`)."""
 
     def __init__(
         self, fd: int, libc: ctypes.CDLL, path: str, on_events: Callable[[list[str]], None]
@@ -83,8 +90,10 @@ class OpenWatch:
                 offset += _EVENT.size + length
                 if mask & IN_OPEN:
                     events.append(OPENED)
-                if mask & (IN_CLOSE_WRITE | IN_CLOSE_NOWRITE):
+                if mask & IN_CLOSE_WRITE:
                     events.append(CLOSED)
+                if mask & IN_CLOSE_NOWRITE:
+                    events.append(CLOSED_READER)
         return events
 
     def pending(self) -> list[str]:

@@ -7,16 +7,26 @@ slave device through a stable symlink and talks to the board. The daemon:
   through untouched whatever the client sets up;
 * follows its clients: from the first open of the slave to the last close is one session of
   the board's service (:mod:`omsd.service`). inotify reports every open and close
-  (:mod:`omsd.transport.inotify`), and the master's hang-up (POLLHUP: nobody has the slave
-  open) tells a last close from the close of one of several programs; the master is read only
-  while somebody has the pty open, so nothing spins and no timer runs while nobody does. When
-  a session ends, what its clients wrote before they closed is read and offered to the board,
-  what the board has not taken is dropped, what they left unread in the terminal is flushed,
-  and nothing is written to the pty until it is opened again: the next program starts clean,
-  even when it opened the pty before the daemon saw the last one close. A program that reopens
-  the pty and reads within the moment the daemon takes to see the close can still find the
-  last answers (the kernel gives no way to flush at the close itself). Without inotify (not
-  Linux) the daemon holds the slave open and the pty is one session for its life;
+  (:mod:`omsd.transport.inotify`), and the master's hang-up (POLLHUP, EIO: nobody has the
+  slave open) tells a last close from the close of one of several programs; the master is read
+  only while somebody has the pty open, so nothing spins and no timer runs while nobody does.
+  When a session ends, what its clients wrote before they closed is read and offered to the
+  board, what the board has not taken is dropped, what they left unread in the terminal is
+  flushed, and nothing is written to the pty until it is opened again: the next program starts
+  clean, even when it opened the pty before the daemon saw the last one close.
+
+  Whose bytes are whose: the master is one stream, so the daemon orders what it reads by what
+  the kernel guarantees. A program's open is reported before its open returns, so before it
+  can write; its close is reported after its last write. Every read of the master is therefore
+  followed, not preceded, by a look at the opens and closes: bytes read before a newcomer's
+  open was reported cannot be the newcomer's, and bytes read once the master has hung up
+  (until it reads EIO) are the last session's. The one case the stream cannot split is a
+  program that writes and closes at once while a newcomer opens and writes before the daemon
+  has read the first one's bytes: what is unread then goes to the newcomer, who is there to
+  read the answer (docs/decisions.md). A program that reopens the pty and reads within the
+  moment the daemon takes to see the last close can still find the last answers (the kernel
+  gives no way to flush at the close itself). Without inotify (not Linux) the daemon holds the
+  slave open and the pty is one session for its life;
 * gives the slave device group permissions (mode 0660 by default, optionally another group) so
   users of that group can open it;
 * points the symlink at the slave atomically (a new link is renamed over the old one) and
@@ -42,10 +52,14 @@ import termios
 import tty
 
 from omsd.service import BoardService
-from omsd.transport.inotify import CLOSED, OPENED, OpenWatch, watch_opens
+from omsd.transport.inotify import CLOSED_READER, OPENED, OpenWatch, watch_opens
 from omsd.transport.terminal import Terminal, terminal_for
 
 MAX_BACKLOG = 64 * 1024
+#: When the count of opens and closes says nobody has the pty but the master has not hung up
+#: and is not being read, how soon to look again (s): the kernel lets the pty go a moment
+#: after it reports the close.
+UNSETTLED_LOOK = 0.001
 #: What one read takes from the master at most.
 READ_SIZE = 4096
 
@@ -82,6 +96,7 @@ class PtyEndpoint:
         self.slave = -1
         self.device = ""
         self._pending = bytearray()
+        self._unread = bytearray()  # read from the master, not yet known whose (_readable)
         self._backlog = bytearray()
         self._reading = False
         self._writing = False
@@ -124,33 +139,56 @@ class PtyEndpoint:
         return any(ev & select.POLLHUP for _, ev in poller.poll(0))
 
     def _opened_or_closed(self, events: list[str]) -> None:
-        """inotify's opens and closes, in order. A close that leaves the count at zero ends
-        the session if the master has hung up, or if an open follows it (the last client went
-        and another came before the daemon looked); otherwise two opens were merged into one
-        event and somebody still has the pty."""
+        """inotify's opens and closes, in order. A session ends when nobody has the pty open
+        (the master hangs up), or when the count of opens and closes says nobody had it open
+        and another open follows (the last client went and another came before the daemon
+        looked). A close that leaves the count at zero while the master has not hung up is
+        not taken as the end yet: a close is reported just before the kernel lets the pty go,
+        and two opens may have been merged into one event; the master's EIO, or the next
+        open, settles it."""
         i = 0
         while i < len(events):
             event = events[i]
             i += 1
             if event == OPENED:
+                if self.connected and not self.openers:
+                    # an open after the count said nobody had the pty: a newcomer
+                    events.extend(self._session_over(reopened=True, upcoming=events[i - 1 :]))
                 self.openers += 1
                 if not self.connected:
                     self._connect()
                 continue
             self.openers = max(0, self.openers - 1)
-            if self.openers or not self.connected:
+            if not self.connected:
                 continue
-            if self._hung_up():
-                events.extend(self._session_over(keep_input=False, upcoming=events[i:]))
+            if self._hung_up():  # nobody has it open, whatever the count says
+                events.extend(self._session_over(reopened=False, upcoming=events[i:]))
+                continue
+            if self.openers:
                 continue
             watch = self._watch
             if OPENED not in events[i:] and watch is not None:
                 events.extend(watch.pending())  # an open that came since is queued by now
             if OPENED in events[i:]:
-                # reopened: what is unread in the master may be the newcomer's already
-                events.extend(self._session_over(keep_input=True, upcoming=events[i:]))
-            else:
-                self.openers = 1  # two opens were one event: somebody still has it open
+                # reopened: what is unread may be the newcomer's already
+                events.extend(self._session_over(reopened=True, upcoming=events[i:]))
+            elif not self._reading and self._loop is not None:
+                # the master's EIO cannot tell while it is not read: look again in a moment
+                self._loop.call_later(UNSETTLED_LOOK, self._look_again)
+        if self._unread and self.connected:
+            # read before these events were seen: the bytes of whoever has the pty now, the
+            # last to open it (the module docstring)
+            self._give_unread()
+
+    def _give_unread(self) -> None:
+        data = bytes(self._unread)
+        self._unread.clear()
+        self._take(data)
+        self._push()
+
+    def _look_again(self) -> None:
+        if self.connected and not self.openers and self.master >= 0 and self._hung_up():
+            self._opened_or_closed(self._session_over(reopened=False, upcoming=[]))
 
     def _connect(self) -> None:
         self.connected = True
@@ -164,14 +202,18 @@ class PtyEndpoint:
             self._loop.add_reader(self.master, self._readable)
             self._reading = True
 
-    def _session_over(self, keep_input: bool, upcoming: list[str]) -> list[str]:
+    def _session_over(self, reopened: bool, upcoming: list[str]) -> list[str]:
         """The last client closed the pty: what it wrote before it closed is read (as a TCP
         client's last bytes are) and offered to the board; then its session ends, and nothing
-        of it is left for the next one. Returns the opens and closes queued meanwhile (to be
-        taken in order); a client that opened while the watch was paused for the flush is
-        found by the master no longer hanging up."""
-        if not keep_input:
-            self._read_all()
+        of it is left for the next one. ``reopened``: somebody opened the pty since, so what is
+        unread may be theirs and is left for them (the module docstring says which bytes are
+        whose). Returns the opens and closes queued meanwhile (to be taken in order); a client
+        that opened while the watch was paused for the flush is found by the master no longer
+        hanging up."""
+        if not reopened:
+            reopened = not self._read_all()
+        if not reopened and self._unread:
+            self._give_unread()
         self.connected = False
         self.openers = 0
         unsent = len(self._pending)
@@ -193,12 +235,17 @@ class PtyEndpoint:
         if OPENED not in upcoming + queued and not self._hung_up():
             self.openers = 1
             self._connect()
+        elif OPENED not in upcoming + queued:
+            self._unread.clear()  # nobody to give them to (a client that came and went)
         return queued
 
     def _flush_terminal(self) -> list[str]:
         """Throw away what the last clients left unread in the terminal. Only the slave's side
         can flush its input, so the daemon opens it for a moment; returns the opens and closes
-        of others queued meanwhile (in order), without the daemon's own."""
+        of others queued meanwhile (in order), without the daemon's own. It opens the slave to
+        read only, so that its close is of the other kind than a client's and cannot be merged
+        with one (:data:`~omsd.transport.inotify.CLOSED_READER`); its open may be merged with a
+        client's, which :meth:`_session_over` finds by the master no longer hanging up."""
         watch = self._watch
         if watch is None:
             with contextlib.suppress(OSError, termios.error):
@@ -206,31 +253,34 @@ class PtyEndpoint:
             return []
         before = watch.pending()  # so that the daemon's own open follows nothing unread
         try:
-            fd = os.open(self.device, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+            fd = os.open(self.device, os.O_RDONLY | os.O_NOCTTY | os.O_NONBLOCK)
         except OSError:
             return before
         with contextlib.suppress(termios.error):
             termios.tcflush(fd, termios.TCIFLUSH)
         os.close(fd)
         after = watch.pending()
-        if OPENED in after:  # the daemon's own open, and the first close after it
+        if OPENED in after:  # the daemon's own open, and its close after it
             at = after.index(OPENED)
             del after[at]
-            if CLOSED in after[at:]:
-                del after[after.index(CLOSED, at)]
+            if CLOSED_READER in after[at:]:
+                del after[after.index(CLOSED_READER, at)]
         return before + after
 
-    def _read_all(self) -> None:
+    def _read_all(self) -> bool:
+        """Read what is in the master into ``_unread``; whether nobody has the pty open once
+        all is read (EIO: what was read is the last session's). False (EAGAIN): somebody has
+        opened it since the daemon saw it hang up, and what was read may be theirs."""
         while True:
             try:
-                data = os.read(self.master, 4096)
-            except OSError:  # BlockingIOError: all read
-                break
-            if not data:
-                break
-            self._take(data)
-        if self._pending:
-            self._push()
+                n = os.readv(self.master, [_READ_BUFFER])
+            except BlockingIOError:
+                return False
+            except OSError:  # EIO: nobody has it open and nothing is left
+                return True
+            if not n:
+                return True
+            self._unread += _READ_BUFFER[:n]
 
     def _place_link(self) -> None:
         self.link.parent.mkdir(parents=True, exist_ok=True)
@@ -243,24 +293,33 @@ class PtyEndpoint:
     # -- input ----------------------------------------------------------------------------------
 
     def _readable(self) -> None:
-        watch = self._watch
-        if watch is not None and watch.queued():
-            watch.drain()  # a close and an open come before the bytes written after them
-            if not self._reading:
-                return  # the session ended: what was unread went with it
         try:
             n = os.readv(self.master, [_READ_BUFFER])
         except BlockingIOError:
-            return
+            n = 0
         except OSError as exc:
-            if exc.errno == errno.EIO:  # the last client closed the slave
-                if self.connected:
-                    self._opened_or_closed(self._session_over(keep_input=True, upcoming=[]))
-                return
-            raise
-        if not n:
+            if exc.errno != errno.EIO:
+                raise
+            # nobody has the slave open and nothing is left to read: the session is over
+            if self.connected:
+                self._opened_or_closed(self._session_over(reopened=False, upcoming=[]))
             return
-        data = bytes(_READ_BUFFER[:n])
+        watch = self._watch
+        if watch is not None and watch.queued():
+            # the opens and closes are looked at after the read, so that a newcomer's bytes
+            # among what was read come with its open (it opened before it wrote): they are
+            # kept in _unread until the events say whose they are
+            self._unread += _READ_BUFFER[:n]
+            watch.drain()
+            if not self._unread or not self.connected:
+                return
+            data = bytes(self._unread)
+            self._unread.clear()
+            n = len(data)
+        elif not n:
+            return
+        else:
+            data = bytes(_READ_BUFFER[:n])
         if self._pending or self.terminal is not None:
             self._take(data)
             self._push()

@@ -21,32 +21,25 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import io
 import os
 import random
-import re
 import select
-from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from omsd import wakeups
 from omsd.board import Board
-from omsd.config import BoardConfig, ControlConfig, DaemonConfig, TcpEndpoint
+from omsd.config import BoardConfig, TcpEndpoint
 from omsd.config import PtyEndpoint as PtyConfig
 from omsd.daemon import Daemon
 from omsd.link import make_link
 from omsd.models import get_model
 from omsd.service import FEED_BITE
-from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import tcp
 from omsd.transport.terminal import terminal_for
 
-WAIT = 20.0
-"""Seconds allowed for what should take a fraction of one (a hang detector, not a timing)."""
-
+from .inprocess import WAIT, serving
 
 # -- the reference ------------------------------------------------------------------------------
 
@@ -95,36 +88,6 @@ def stream(rnd: random.Random, client: int, n: int) -> bytes:
 @pytest.fixture(autouse=True)
 def _runtime(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("RUNTIME_DIRECTORY", str(tmp_path / "run"))
-
-
-@contextlib.asynccontextmanager
-async def serving(*boards: BoardConfig) -> AsyncIterator[Daemon]:
-    """The boards served until the block ends; then stopped, with nothing left behind (no
-    endpoint, no wake-up timer) and nothing gone wrong on the way."""
-    config = DaemonConfig(boards=boards, control=ControlConfig(socket=None, explicit=True))
-    out = io.StringIO()
-    daemon = Daemon(config, TrafficLog("plain", stream=out, env={}), out=io.StringIO())
-    loop = asyncio.get_running_loop()
-    try:
-        await daemon.start()
-        try:
-            yield daemon
-        finally:
-            await daemon.stop()
-    finally:
-        release_wakeups(loop)
-    assert not re.findall(r"^\S+ error: .*", out.getvalue(), re.M), out.getvalue()[-2000:]
-
-
-def release_wakeups(loop: asyncio.AbstractEventLoop) -> None:
-    """The loop's wake-up timerfd, closed (omsd.wakeups keeps it as long as the loop lives)."""
-    timers = wakeups._BY_LOOP.pop(loop, None)
-    if isinstance(timers, wakeups.TimerFdTimers):
-        if timers._reading:
-            loop.remove_reader(timers._timer.fd)
-            timers._reading = False
-        timers._timer.close()
-        timers._timer.fd = -1  # its finalizer closes it again: not another file's number
 
 
 def tcp_board(name: str, model: str = "PC48-4E", link: str = "driver", **kw: Any) -> BoardConfig:
