@@ -27,13 +27,14 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from omsd.dialects import framing, lookup
-from omsd.dialects.interpreter import Interpreter
+from omsd.dialects.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.engine.axis import Axis
-from omsd.engine.machine import Machine
+from omsd.engine.machine import AT_REST_MARGIN, Machine
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
 from omsd.protocol.lexer import SEPARATORS, Command
+from omsd.protocol.operands import OperandError
 
 CONTROL_D = 0x04
 CONTROL_Y = 0x19
@@ -169,18 +170,36 @@ class Board(Machine):
         full and more is to come, and at the end ``settle`` and ``advance`` to ``now``. Those
         settles and that advance are made here too, at the same points, unless the machine is
         still at rest there (then they would change nothing)."""
-        if not (self.at_rest(now) and now >= self.now and self.init_until is None):
+        # at_rest(now), written out: this is the path a polling client takes every time
+        if not self.settled or self.deadline_stale or self.init_until is not None or now < self.now:
+            return False
+        deadline = self.deadline
+        if deadline is not None and now >= deadline - AT_REST_MARGIN:
             return False
         interp = self.interpreter
-        words = interp.report_words
-        command = words.get(data)
-        if command is not None:  # the usual case: one word
+        ready = interp.bare_reports()
+        entry = ready.get(data) if ready is not None else None
+        if entry is not None:  # the usual case: one word, ready to run (run_bare, written out)
+            handler, cell, command = entry
             self.now = now
             self.talker = self.input_source
-            if not interp.run_bare(command, now):
-                raise AssertionError(f"{command.mnemonic}, a report, waited for queue space")
+            interp.depth = 0
+            try:
+                handler(interp, command, cell, now)
+            except Blocked as exc:
+                raise AssertionError(f"{command.mnemonic}, a report, waited") from exc
+            except (CommandFailed, OperandError) as exc:
+                self.command_error(exc.kind, command.text, now)
             if self.settled and not self.deadline_stale:
                 return True  # still at rest: its deadline is the one at_rest looked at
+        elif (word := (words := interp.report_words).get(data)) is not None:
+            # one word not ready here (a check fails: run_bare says why)
+            self.now = now
+            self.talker = self.input_source
+            if not interp.run_bare(word, now):
+                raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
+            if self.settled and not self.deadline_stale:
+                return True
         else:
             found = _scan(data, words, interp.words.longest)
             if not found:
@@ -188,13 +207,13 @@ class Board(Machine):
             self.now = now
             self.talker = self.input_source
             full = interp.capacity  # where the regular way finds the buffer full, and settles
-            for end, command in found:
+            for end, word in found:
                 while full < end:
                     if not self.at_rest(now):
                         self.settle(now)
                     full += interp.capacity
-                if not interp.run_bare(command, now):
-                    raise AssertionError(f"{command.mnemonic}, a report, waited for queue space")
+                if not interp.run_bare(word, now):
+                    raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
         if not self.at_rest(now):
             self.settle(now)
             self.advance(now)

@@ -55,6 +55,8 @@ def _motor_fits(motor: str, axis: Axis) -> bool:
 
 #: What :meth:`Interpreter.ready` keeps for a command: its handler and queue-table cell.
 Ready = tuple[AnyHandler, Cell]
+#: A report ready to run whole (:meth:`Interpreter.bare_reports`): its handler, cell, command.
+BareReport = tuple[AnyHandler, Cell, Command]
 
 
 class Blocked(Exception):
@@ -99,6 +101,8 @@ class Interpreter(Operands):
         self.report_words = self.words.reports
         # per mode and axis: the operand-less commands that pass every check there (ready)
         self._ready: dict[tuple[str, int], dict[str, Ready | None]] = {}
+        # per mode and axis: the reports among them, by their bytes (bare_reports)
+        self._bare: dict[tuple[str, int], dict[bytes, BareReport]] = {}
         self.pending: deque[tuple[Token, int]] = deque()  # with the nesting depth it came from
         self.reset()
 
@@ -374,6 +378,25 @@ class Interpreter(Operands):
                 return True
         self.pending.appendleft((command, 0))
         return False
+
+    def bare_reports(self) -> dict[bytes, BareReport] | None:
+        """The reports (:attr:`report_words`) that pass every check in the current mode and
+        on the current axis (:meth:`ready`), by the bytes that spell them, each with its handler
+        and cell: what ``Board._reports_at_rest`` runs in one lookup (issue 16). None while a
+        contour or a definition is open (every command is checked again then, as ``ready``
+        says)."""
+        if self.contour is not None or self.only is not None:
+            return None
+        key = (self.mode, self.axis_index)
+        table = self._bare.get(key)
+        if table is None:
+            table = {}
+            for word, command in self.report_words.items():
+                entry = self.ready(command)
+                if entry is not None:
+                    table[word] = (entry[0], entry[1], command)
+            self._bare[key] = table
+        return table
 
     def ready(self, command: Command) -> Ready | None:
         """:meth:`_check` of an operand-less command (a :class:`~omsd.dialects.words.Words`

@@ -161,6 +161,14 @@ class Core:
         self._output.append(Reply(t, before + payload + after, payload))
         self._sources.append(self.talker)
 
+    def reply_number(self, value: int, t: float) -> None:
+        """An integer value (``RP``, the query polled most), as :meth:`reply_value` gives
+        ``str(value)``, formatted straight to bytes."""
+        before, after = self.framing.value
+        payload = b"%d" % value
+        self._output.append(Reply(t, before + payload + after, payload))
+        self._sources.append(self.talker)
+
     def reply_status(self, text: str, t: float) -> None:
         """An axis status, in the dialect's framing (PC48: "one line feed and two carriage
         returns on each end")."""

@@ -104,6 +104,8 @@ GAP = st.sampled_from([0.0, 0.0, 1e-4, 0.01, 0.3, 2.0])
 STEP = st.one_of(
     st.tuples(st.just("soup"), st.integers(0, 2**32 - 1), st.integers(1, 40), SOURCE, GAP),
     st.tuples(st.just("reports"), st.integers(0, 2**32 - 1), st.integers(1, 90), SOURCE, GAP),
+    # one report alone, as a client polls: the receive fast path's one lookup
+    st.tuples(st.just("word"), st.integers(0, 2**32 - 1), SOURCE, GAP),
     st.tuples(st.just("statement"), st.integers(0, len(STATEMENTS) - 1), SOURCE, GAP),
     st.tuples(st.just("run"), st.floats(0.0, 3.0)),
     st.tuples(st.just("deadline"), st.sampled_from([-1e-9, -1e-12, 0.0, 1e-12, 1e-9])),
@@ -120,13 +122,15 @@ def play(model: str, steps: list[tuple[Any, ...]]) -> Twin:
     now = 0.0
     for step in steps:
         kind = step[0]
-        if kind in ("soup", "reports", "statement"):
+        if kind in ("soup", "reports", "word", "statement"):
             source, gap = step[-2], step[-1]
             now += gap
             if kind == "soup":
                 data = command_soup(random.Random(step[1]), twin.model, step[2])
             elif kind == "reports":
                 data = report_run(twin.fast, random.Random(step[1]), step[2])
+            elif kind == "word":
+                data = random.Random(step[1]).choice(sorted(twin.fast.interpreter.words.reports))
             else:
                 data = STATEMENTS[step[1]].encode()
             twin.receive(data, now, source)  # what is not taken is dropped, by both

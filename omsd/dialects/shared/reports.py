@@ -17,15 +17,14 @@ from omsd.protocol.lexer import Command
 
 def status(axis: Axis, t: float) -> str:
     """RA/QA field (PC48 §6.13 RA): direction P/M, done D/N, overtravel L/N (in the direction
-    of char 4), home H/N."""
+    of char 4), home H/N. The switches see the carriage once, at ``t`` (as a snapshot does)."""
     d = axis.heading(t)
-    return "".join(
-        (
-            "P" if d > 0 else "M",
-            "D" if axis.done else "N",
-            "L" if axis.limit_active(d, t) else "N",
-            "H" if axis.home_sensed(t) else "N",
-        )
+    carriage = axis.carriage(t)
+    return (
+        ("P" if d > 0 else "M")
+        + ("D" if axis.done else "N")
+        + ("L" if axis.limit_active(d, t, carriage) else "N")
+        + ("H" if axis.home_sensed(t, carriage) else "N")
     )
 
 
@@ -48,7 +47,7 @@ def _list(ix: Interpreter, fn: Callable[[Axis], str], t: float) -> None:
 def _rp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.mode == "single":  # the query polled most: one axis, said without a list
         machine = ix.machine
-        machine.reply_value(str(machine.axes[ix.axis_index].counter(t)), t)
+        machine.reply_number(machine.axes[ix.axis_index].counter(t), t)
     else:
         _list(ix, lambda a: str(a.counter(t)), t)
 
