@@ -198,7 +198,8 @@ def test_ctl_reset_drops_held_input(setup: Callable[..., Setup], kind: str) -> N
     assert wait_for(lambda: _held_as_printed(s)), s.held()
     s.ctl.reset()
     assert s.held() is None
-    assert "reset: dropped 6 bytes of held input" in s.daemon.stderr
+    # (the daemon's standard error is read by a thread of the test: wait for the line)
+    assert wait_for(lambda: "reset: dropped 6 bytes of held input" in s.daemon.stderr)
     assert s.ctl.state()["axes"]["X"]["moving"] is False  # a power cycle
     # the same client goes on talking to a board that listens (after the reset's init time)
     assert a.ask(b"WY") == WY
@@ -341,7 +342,7 @@ def test_an_orderly_close_is_given_linger_seconds_then_dropped(omsd: Omsd) -> No
             f"dropped 6 bytes of its input that the board had not taken ({HELD_TEXT})" in d.stderr
         )
     ), d.stderr
-    assert "closed 0.5 s after it stopped sending" in d.stderr
+    assert wait_for(lambda: "closed 0.5 s after it stopped sending" in d.stderr), d.stderr
     with Conn(*d.tcp()) as b:
         assert b.ask(b"WY") == WY
         assert b.quiet(0.2) == b""

@@ -598,7 +598,7 @@ def test_the_default_board_as_the_readme_serves_it(driver: WebDriver, daemons: O
     daemon = daemons("--web", "127.0.0.1:0", "--tcp", "127.0.0.1:0", expect=1)
     try:
         url = served_dashboard(daemon)
-        assert "(read-only)" in daemon.stderr
+        assert wait_for(lambda: "(read-only)" in daemon.stderr), daemon.stderr
         open_page(driver, url)
         assert listed(driver) == {"board1": "PC48-4E"}
         assert not displayed(driver.find_elements(By.CSS_SELECTOR, "button[data-op]"))
