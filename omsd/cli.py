@@ -53,12 +53,43 @@ from omsd.helptext import HelpFormatter, examples
 # ``omsd ctl`` within 3x ``python -c pass``): the parser needs argparse and the defaults it
 # quotes (omsd.defaults); ``omsd models`` the model rows; ``omsd ctl`` the control client;
 # ``omsd config`` and serving the configuration (omsd.config), and serving asyncio, the engine
-# and the daemon. tests/test_import_boundaries.py holds each command to what it may import.
+# and the daemon; a command line that serves is read without the commands' parsers at all
+# (_serving_args). tests/test_import_boundaries.py holds each command to what it may import.
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f"{self.prog}: {message}\n")
+
+
+class _NotServing(Exception):
+    """The command line is not one :func:`_serving_args` reads."""
+
+
+class _ServingParser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise _NotServing
+
+
+def _serving_args(argv: list[str]) -> argparse.Namespace | None:
+    """The arguments of a command line that serves (no COMMAND, no --help, no --version, no
+    error), as the whole parser would give them, read without building the commands' parsers
+    and importing what they need (start-up); None for any other, which :func:`_parser` reads
+    (and says what is wrong with). It knows the same option strings, so that abbreviations are
+    read alike."""
+    p = _ServingParser(prog="omsd", add_help=False)
+    p.add_argument("-h", "--help", action="store_true")
+    p.add_argument("--version", action="store_true")
+    _serving_options(p)
+    try:
+        args, rest = p.parse_known_args(argv)
+    except _NotServing:
+        return None
+    if rest or args.help or args.version:
+        return None
+    del args.help, args.version
+    args.command = None
+    return args
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -82,6 +113,92 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=HelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"omsd {__version__}")
+    _serving_options(p)
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands", prog="omsd")
+    sub.add_parser(
+        "models",
+        help="list the board personalities",
+        description="List the board personalities: model name and what is fitted.",
+        epilog=examples(
+            ("omsd models", "PC48-2 ... PCIX-400, one a line"),
+            ("omsd models | grep PCIX", "the PCIx models"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    commands = sub.add_parser(
+        "commands",
+        help="list the commands a model understands, with operands, ranges and manual pages",
+        description="List the commands MODEL understands, one a line: the mnemonic, its\n"
+        "operand form (# a number, [#] one that may be left out, #,#,…; one per axis\n"
+        "in AA/AM), the range of each operand, the manual's section and page, and\n"
+        "what it does (the manual's command summary; where it applies in brackets).",
+        epilog=examples(
+            (f"omsd commands {DEFAULT_MODEL}", "every command of the default board"),
+            ("omsd commands PCIX-400 --grep home", "the homing commands of a PCIx"),
+            ("omsd commands VS4-040 --grep VL", "VL and the commands that mention it"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    commands.add_argument(
+        "model",
+        metavar="MODEL",
+        nargs="?",
+        default=DEFAULT_MODEL,
+        help=f"a model of omsd models, case-insensitive (default: {DEFAULT_MODEL})",
+    )
+    commands.add_argument(
+        "--grep",
+        metavar="TEXT",
+        help="only the commands whose mnemonic or description contains TEXT, whatever the case"
+        " (default: all)",
+    )
+    console = sub.add_parser(
+        "console",
+        help="talk to one board on this terminal, or run a command file through it",
+        description="Talk to one board without serving it: what you type goes to the board\n"
+        "(its own stream, no driver link), its replies come back, and its events\n"
+        "(done, limit, slip, command error) are shown in brackets on standard error.\n"
+        "With standard input a file or a pipe, every command in it is sent, the\n"
+        "replies are printed, and it exits 0 at the end of the input once the board\n"
+        "has taken everything and its axes are at rest (at most --wait seconds).",
+        epilog=examples(
+            ("omsd console", "type WY, Enter: PC48 ver 3.00-4"),
+            ("omsd console --board PCIX-400 < cmds.txt", "run a command file"),
+            ("printf 'MR1000 GO ID RP\\n' | omsd console", "[done X], 1000"),
+        ),
+        formatter_class=HelpFormatter,
+    )
+    console.add_argument(
+        "--board",
+        dest="console_board",
+        default=DEFAULT_MODEL,
+        metavar="MODEL",
+        help="the board's model",
+    )
+    console.add_argument(
+        "--wait",
+        type=_seconds,
+        default=CONSOLE_WAIT,
+        metavar="S",
+        help="at the end of a file or pipe, how long motion still running may take"
+        f" (default: {CONSOLE_WAIT:g} s)",
+    )
+    _config_parser(sub)
+    from omsd.recording.cli import add_record_parser, add_replay_parser  # (argparse only)
+
+    add_record_parser(sub)
+    add_replay_parser(sub)
+    # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
+    ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
+    ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
+    from omsd.topcli import add_top_parser  # (argparse only)
+
+    add_top_parser(sub)
+    return p
+
+
+def _serving_options(p: argparse.ArgumentParser) -> None:
+    """The options of serving: ``omsd`` without a COMMAND."""
     p.add_argument(
         "--config",
         metavar="FILE",
@@ -187,87 +304,6 @@ def _parser() -> argparse.ArgumentParser:
         help="the event loop: auto is uvloop where it is installed (pip install 'omsd[fast]'),"
         " else asyncio's own (default: auto)",
     )
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", title="commands", prog="omsd")
-    sub.add_parser(
-        "models",
-        help="list the board personalities",
-        description="List the board personalities: model name and what is fitted.",
-        epilog=examples(
-            ("omsd models", "PC48-2 ... PCIX-400, one a line"),
-            ("omsd models | grep PCIX", "the PCIx models"),
-        ),
-        formatter_class=HelpFormatter,
-    )
-    commands = sub.add_parser(
-        "commands",
-        help="list the commands a model understands, with operands, ranges and manual pages",
-        description="List the commands MODEL understands, one a line: the mnemonic, its\n"
-        "operand form (# a number, [#] one that may be left out, #,#,…; one per axis\n"
-        "in AA/AM), the range of each operand, the manual's section and page, and\n"
-        "what it does (the manual's command summary; where it applies in brackets).",
-        epilog=examples(
-            (f"omsd commands {DEFAULT_MODEL}", "every command of the default board"),
-            ("omsd commands PCIX-400 --grep home", "the homing commands of a PCIx"),
-            ("omsd commands VS4-040 --grep VL", "VL and the commands that mention it"),
-        ),
-        formatter_class=HelpFormatter,
-    )
-    commands.add_argument(
-        "model",
-        metavar="MODEL",
-        nargs="?",
-        default=DEFAULT_MODEL,
-        help=f"a model of omsd models, case-insensitive (default: {DEFAULT_MODEL})",
-    )
-    commands.add_argument(
-        "--grep",
-        metavar="TEXT",
-        help="only the commands whose mnemonic or description contains TEXT, whatever the case"
-        " (default: all)",
-    )
-    console = sub.add_parser(
-        "console",
-        help="talk to one board on this terminal, or run a command file through it",
-        description="Talk to one board without serving it: what you type goes to the board\n"
-        "(its own stream, no driver link), its replies come back, and its events\n"
-        "(done, limit, slip, command error) are shown in brackets on standard error.\n"
-        "With standard input a file or a pipe, every command in it is sent, the\n"
-        "replies are printed, and it exits 0 at the end of the input once the board\n"
-        "has taken everything and its axes are at rest (at most --wait seconds).",
-        epilog=examples(
-            ("omsd console", "type WY, Enter: PC48 ver 3.00-4"),
-            ("omsd console --board PCIX-400 < cmds.txt", "run a command file"),
-            ("printf 'MR1000 GO ID RP\\n' | omsd console", "[done X], 1000"),
-        ),
-        formatter_class=HelpFormatter,
-    )
-    console.add_argument(
-        "--board",
-        dest="console_board",
-        default=DEFAULT_MODEL,
-        metavar="MODEL",
-        help="the board's model",
-    )
-    console.add_argument(
-        "--wait",
-        type=_seconds,
-        default=CONSOLE_WAIT,
-        metavar="S",
-        help="at the end of a file or pipe, how long motion still running may take"
-        f" (default: {CONSOLE_WAIT:g} s)",
-    )
-    _config_parser(sub)
-    from omsd.recording.cli import add_record_parser, add_replay_parser  # (argparse only)
-
-    add_record_parser(sub)
-    add_replay_parser(sub)
-    # listed for --help only: main() hands everything after "ctl" to omsd.ctl unparsed
-    ctl = sub.add_parser("ctl", help="control a running daemon (omsd ctl --help)", add_help=False)
-    ctl.add_argument("ctl_args", nargs=argparse.REMAINDER)
-    from omsd.topcli import add_top_parser  # (argparse only)
-
-    add_top_parser(sub)
-    return p
 
 
 def _config_parser(sub: argparse._SubParsersAction[_Parser]) -> None:
@@ -371,7 +407,7 @@ def main(argv: list[str] | None = None) -> int:
         from omsd.ctl import main as ctl_main
 
         return ctl_main(argv[1:])
-    args = _parser().parse_args(argv)
+    args = _serving_args(argv) or _parser().parse_args(argv)
     if args.command == "ctl":
         print("omsd: ctl must come first: omsd ctl [OPTIONS] COMMAND", file=sys.stderr)
         return 2

@@ -29,19 +29,16 @@ from omsd import sdnotify
 from omsd.config import DaemonConfig, runtime_directory
 from omsd.control.server import ControlServer, SocketInUse
 from omsd.files import Refused, missing_directory, preflight, state_file_problem
-from omsd.pacing import Line
 from omsd.service import BoardService
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import Endpoint
 from omsd.transport.pty import PtyEndpoint
-from omsd.transport.rfc2217 import serve_rfc2217
-from omsd.transport.serial import SerialEndpoint
-from omsd.transport.serial import reason as serial_reason
 from omsd.transport.tcp import serve_tcp
 
 if TYPE_CHECKING:
     from omsd.mqtt import MqttBridge
     from omsd.statefile import BoardFlash, StateFile
+    from omsd.transport.serial import SerialEndpoint
     from omsd.web.server import WebServer
 
 
@@ -236,7 +233,18 @@ class Daemon:
 
     async def _start_serial(self, service: BoardService) -> None:
         """The board's serial devices (:mod:`omsd.transport.serial`) and RFC 2217 sockets
-        (:mod:`omsd.transport.rfc2217`)."""
+        (:mod:`omsd.transport.rfc2217`), imported for a board that has them."""
+        board = service.config
+        if board.serial_port:
+            self._open_serial_ports(service)
+        if board.rfc2217:
+            await self._serve_rfc2217(service)
+
+    def _open_serial_ports(self, service: BoardService) -> None:
+        from omsd.pacing import Line
+        from omsd.transport.serial import SerialEndpoint
+        from omsd.transport.serial import reason as serial_reason
+
         board = service.config
         for serial in board.serial_port:
             line = Line(serial.baud, serial.bytesize, serial.parity, serial.stopbits)
@@ -250,6 +258,11 @@ class Daemon:
                 ) from None
             self.serials.append(port)
             self._announce(Endpoint(board.name, board.model, board.link, "serial", address))
+
+    async def _serve_rfc2217(self, service: BoardService) -> None:
+        from omsd.transport.rfc2217 import serve_rfc2217
+
+        board = service.config
         for rfc in board.rfc2217:
             try:
                 server, host, port_number = await serve_rfc2217(

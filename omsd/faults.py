@@ -18,8 +18,10 @@ import random
 from dataclasses import dataclass, field
 
 
-@dataclass
+@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
 class Faults:
+    """The faults on one board's cable (see the module's text)."""
+
     latency: float = 0.0
     baud: int | None = None
     drop: float = 0.0

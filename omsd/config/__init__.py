@@ -231,6 +231,9 @@ class BoardConfig:
 
 @dataclass(frozen=True)
 class LogConfig:
+    """The traffic log (``[log]``, ``--log``, ``--view``): a JSON-lines file, and what standard
+    error shows."""
+
     file: Path | None = None  # JSON-lines traffic log
     view: str = DEFAULT_VIEW  # "auto", "rich", "plain" or "off"
     group: str | None = None  # a new log file is 0640 in this group; None: 0600
@@ -238,6 +241,10 @@ class LogConfig:
 
 @dataclass(frozen=True)
 class DaemonConfig:
+    """Everything one daemon serves: its boards, and what they share (the log, the state file,
+    the control endpoint, the MQTT bridge, the web dashboard); ``source`` says where it was
+    read from."""
+
     boards: tuple[BoardConfig, ...]
     log: LogConfig = field(default_factory=LogConfig)
     source: str = "built-in default"  # "built-in default", "command line", or the file path

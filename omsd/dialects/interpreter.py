@@ -20,19 +20,21 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from omsd.dialects.operands import CommandFailed, Operands
 from omsd.dialects.registry import AnyHandler, Dialect, prefixes
 from omsd.dialects.words import SyntaxTable, syntax, words_of
 from omsd.engine.axis import Axis
-from omsd.engine.contour import ContourDefinition
 from omsd.engine.machine import Machine
 from omsd.engine.queue import Op
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.errors import ErrorKind
 from omsd.protocol.lexer import Command, Garbage, Lexer, Token
 from omsd.protocol.operands import OperandError
+
+if TYPE_CHECKING:  # contouring is imported when a contour is defined (start-up)
+    from omsd.engine.contour import ContourDefinition
 
 __all__ = ["Blocked", "Capture", "CommandFailed", "Interpreter", "LoopMark"]
 
@@ -68,14 +70,12 @@ class Capture(Protocol):
 
     def feed(self, b: int) -> bool:
         """Take one character; True once the capture has ended."""
-        ...
 
     def finish(self, t: float) -> None:
         """The capture ended (and the interpreter reads commands again)."""
-        ...
 
 
-@dataclass
+@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
 class LoopMark:
     kind: str  # "LS", "WS", "WH"
     context: str  # axis letter, or "AA" for a loop entered in AA/AM

@@ -26,8 +26,11 @@ from omsd.protocol.ranges import RangeTable
 AnyHandler = Callable[[Any, Command, Cell, float], None]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False, repr=False)
 class Dialect:
+    """A command language, as the board needs it (see the module's text); one a language, so
+    compared by identity, and without a repr (of its tables and functions)."""
+
     name: str  # the model row's ``dialect``
     description: str
     commands: Callable[[Model], Mapping[str, CommandSpec]]

@@ -33,7 +33,7 @@ def syntax(spec: CommandSpec) -> Syntax:
     return Syntax.OPTIONAL if spec.optional else Syntax.REQUIRED
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False, repr=False)  # one a syntax: as omsd.dialects.registry.Dialect
 class Words:
     """The operand-less commands a lexer between commands takes whole
     (:meth:`~omsd.protocol.lexer.Lexer.bare_words`): by their spelling, by the spelling packed

@@ -17,17 +17,19 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from decimal import Decimal
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from omsd.engine import profiles as pf
 from omsd.engine.clock import SampleClock
 from omsd.engine.extensions import Options
 from omsd.engine.queue import CommandQueue, SyncGroup
-from omsd.engine.servo import ServoGains, ServoLoop
 from omsd.engine.states import Gear, HomeSearch, Motion, Pending, Wait
 from omsd.engine.trajectory import Trajectory
 from omsd.engine.world import AxisWorld, LimitWiring, SwitchType, WorldState
 from omsd.models.spec import Model
+
+if TYPE_CHECKING:  # the servo loop is imported by the boards that have servo axes (start-up)
+    from omsd.engine.servo import ServoLoop
 
 #: How often a moving (or settling) servo axis is looked at for a runaway following error:
 #: every 32 samples of the 2048-per-second loop, 15.6 ms.
@@ -86,9 +88,11 @@ class AxisState:
         self.servo_last: float | None = None  # motor position at the last look (on_servo)
         # a servo axis: the PID loop and motor (omsd.engine.servo); the trajectory is the
         # commanded position, the loop's motor the actual one
-        self.servo: ServoLoop | None = (
-            ServoLoop(rate=model.sample_rate, origin=host.clock.origin) if self.is_servo else None
-        )
+        self.servo: ServoLoop | None = None
+        if self.is_servo:
+            from omsd.engine.servo import ServoLoop
+
+            self.servo = ServoLoop(rate=model.sample_rate, origin=host.clock.origin)
         self.done_bit = 1 << model.done_bits[index]
         self.queue = CommandQueue(model.queue_size)
         self.phys_offset = world.start_position
@@ -170,6 +174,8 @@ class AxisState:
         self.direction_inverted: bool = False
         self.limit_high: bool = False  # limit lines true when high (else low)
         if self.servo is not None:
+            from omsd.engine.servo import ServoGains
+
             self.servo.set_gains(ServoGains())
 
     # -- frames -------------------------------------------------------------------------------

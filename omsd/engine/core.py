@@ -16,17 +16,19 @@ an axis's motion when it reports what happens to it; 0 is the board's own doing.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from omsd.engine import profiles as pf
 from omsd.engine.axis import Axis
 from omsd.engine.clock import SampleClock
-from omsd.engine.contour import ContourDefinition
 from omsd.engine.events import CommandErrorEvent, DoneEvent, ErrorKind, Event, Output, Reply
 from omsd.engine.extensions import Framing, Front, Options, Silent
 from omsd.engine.registers import CMD_S, DON_S, Registers
 from omsd.engine.world import AxisWorld, WorldState
 from omsd.models.spec import Model
+
+if TYPE_CHECKING:  # contouring is imported when a contour is defined (start-up)
+    from omsd.engine.contour import ContourDefinition
 
 FlashWriter = Callable[[dict[str, Any] | None, dict[int, str]], None]
 

@@ -67,8 +67,11 @@ class Op:
     source: int = 0  # the session that sent it (Board.input_source when it was queued)
 
 
-@dataclass(slots=True)
+@dataclass(eq=False, slots=True)  # state, compared by identity (omsd.engine.states)
 class LoopFrame:
+    """A loop running in an axis queue: its kind, where it starts, the passes left (LS) and when
+    the current pass began."""
+
     kind: str  # "LS", "WS" or "WH"
     start: int  # program index of the loop-start op
     remaining: int = 0

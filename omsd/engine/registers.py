@@ -36,8 +36,10 @@ TBE_E = 0x40
 IRQ_E = 0x80
 
 
-@dataclass
+@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
 class Registers:
+    """The registers' latched bits (the status register's others are computed when read)."""
+
     done: int = 0  # done flag register latch
     status: int = 0  # latched bits: CMD_S, ENC_S, OVRT, DON_S (INIT/TBE/IBF are computed)
     control: int = 0

@@ -7,6 +7,10 @@ the mechanisms share.
 * :class:`Pending`: a move that has been specified and waits for its start;
 * :class:`HomeSearch`: the home switch (or encoder index) being looked for;
 * :class:`Gear`: the axis follows another one (electronic gearing, :mod:`omsd.engine.gearing`).
+
+The records are state, not values: like the queue's :class:`~omsd.engine.queue.Op`, they are
+compared by identity (``eq=False``: nothing compares two of them, and a dataclass's ``__eq__``
+is source compiled at import, start-up's largest cost).
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ class Motion(Enum):
     GEAR = auto()  # following a master axis (omsd.engine.gearing)
 
 
-@dataclass
+@dataclass(eq=False)
 class Wait:
     """What the axis's current queue op waits for before the queue may go on."""
 
@@ -46,7 +50,7 @@ class Wait:
     jump: int | None = None  # program index to go on from (a loop pass), else the next op
 
 
-@dataclass
+@dataclass(eq=False)
 class Pending:
     """A move set up by an absolute or relative move command, waiting for its start."""
 
@@ -55,8 +59,10 @@ class Pending:
     linear: SyncGroup | None = None  # linear interpolation group
 
 
-@dataclass
+@dataclass(eq=False)
 class HomeSearch:
+    """A home search under way: what to do at home, the direction, and what was seen last."""
+
     position: float  # value loaded into the counter at home
     kill: bool  # stop at once at home, do not load the counter
     direction: int
@@ -64,7 +70,7 @@ class HomeSearch:
     index_points: tuple[float, ...] = ()  # encoder-home mode: physical points where home is true
 
 
-@dataclass
+@dataclass(eq=False)
 class Gear:
     """An axis geared to ``master`` (an axis index) at ``ratio`` geared counts per master count.
 

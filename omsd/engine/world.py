@@ -66,7 +66,7 @@ class AxisWorld:
         return replace(self, **changes)  # type: ignore[arg-type]
 
 
-@dataclass
+@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
 class WorldState:
     """What the bench technician has done to the world: forced switches and driven inputs."""
 

@@ -32,6 +32,8 @@ _ZERO: Row = (0, 0, 0, 0, 0)
 
 @dataclass(frozen=True)
 class Cell:
+    """One entry of a command's queue table: immediate, not valid, or the slots it takes."""
+
     kind: Kind
     # slots[encoder][ramp]: encoder 0 = NO ENCODER, 1 = ENCODER (PCIx: "If the axis is a
     # stepper and encoder or servo axis add ..."); ramp in RAMP_COLUMNS order

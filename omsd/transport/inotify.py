@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import ctypes.util
 import functools
 import os
 import select
@@ -107,10 +106,12 @@ class OpenWatch:
             self.fd = -1
 
 
-@functools.cache  # once per process: find_library runs ldconfig, ~2.5 ms a pty (issue 16)
+@functools.cache  # once per process (issue 16)
 def _libc() -> ctypes.CDLL | None:
+    # the C library's calls as the process already has them (dlopen(NULL), as omsd.wakeups):
+    # ctypes.util.find_library("c") would run ldconfig for its name, ~2.5 ms at start-up
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or None, use_errno=True)
+        libc = ctypes.CDLL(None, use_errno=True)
     except OSError:
         return None
     for name in ("inotify_init1", "inotify_add_watch"):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from omsd import cli
 from omsd.models import MODELS
 
 from .process import Omsd, run_omsd
@@ -134,3 +135,54 @@ def test_port_in_use_on_a_later_board_undoes_the_earlier_ones(omsd: Omsd, tmp_pa
     assert "second" in errors[0] and f"127.0.0.1:{port}" in errors[0]
     assert result.stderr.splitlines()[-1] == errors[0]
     assert not os.path.lexists(link)
+
+
+SERVING = [
+    [],
+    ["--board", "PC48-4E", "--tcp", "127.0.0.1:0", "--pty", "/tmp/b", "--control", "/tmp/c"],
+    ["--board", "models"],  # a command's name as an option's value
+    ["--tcp", "0", "--tcp", "7001", "--terminal", "--view", "plain", "--loop", "asyncio"],
+    ["--config", "omsd.toml", "--state", "s.json", "--web", "8080", "--web-control"],
+    ["--boa", "PC48-4E", "--vie", "off", "--conf=f.toml"],  # abbreviations
+]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        *SERVING,
+        ["models"],
+        ["--board", "PC48-4E", "commands"],
+        ["ctl", "--help"],
+        ["--help"],
+        ["-h"],
+        ["--h"],
+        ["--version"],
+        ["--vers"],
+        ["--v", "plain"],  # --version or --view
+        ["--ve", "plain"],
+        ["--co", "x"],  # --config or --control
+        ["--bogus"],
+        ["--tcp"],
+        ["--loop", "nosuch"],
+        ["stray"],
+        ["--", "models"],
+    ],
+)
+def test_serving_is_read_as_the_whole_parser_reads_it(
+    argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A command line that serves is read without the commands' parsers (start-up): to the same
+    arguments as the whole parser gives, and anything else is left to the whole parser (which
+    answers --help and --version, and words the errors)."""
+    quick = cli._serving_args(argv)
+    assert (quick is not None) == (argv in SERVING)
+    try:
+        whole = cli._parser().parse_args(argv)
+    except SystemExit:
+        assert quick is None
+        return
+    finally:
+        capsys.readouterr()
+    if quick is not None:
+        assert vars(quick) == vars(whole)

@@ -266,7 +266,7 @@ def _gs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     _single_go(ix, cmd, cell, "GS")
 
 
-@dataclass
+@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
 class SlipWatch(HomeSearch):
     """GS: the home switch watched during a move (not a home search: nothing stops or loads)."""
 

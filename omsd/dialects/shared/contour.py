@@ -1,15 +1,22 @@
-"""The shared language, PC48 §6.21: constant velocity contouring."""
+"""The shared language, PC48 §6.21: constant velocity contouring.
+
+The contouring engine (:mod:`omsd.engine.contour`) is imported by the handlers that use it: a
+board that never contours never loads it (start-up; tests/test_import_boundaries.py)."""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.shared.table import handles
 from omsd.engine.axis import Motion
-from omsd.engine.contour import Arc, ContourDefinition, Line, plan
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
 from omsd.protocol.errors import ErrorKind
 from omsd.protocol.lexer import Command
+
+if TYPE_CHECKING:
+    from omsd.engine.contour import ContourDefinition
 
 # -- 6.21 contouring ------------------------------------------------------------------------------
 
@@ -27,6 +34,8 @@ def _cv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("CD")
 def _cd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    from omsd.engine.contour import ContourDefinition
+
     machine = ix.machine
     if machine.model.contour_queue <= 0:
         raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
@@ -47,6 +56,8 @@ def _cd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 def contour_line(ix: Interpreter, cmd: Command, cell: Cell) -> None:
     """MT inside a contour: "only the axes being used in the contour must be provided"."""
+    from omsd.engine.contour import Line
+
     defn = ix.contour
     assert defn is not None
     fields = ix.per_axis(cmd, list(defn.axes))
@@ -63,6 +74,8 @@ def contour_line(ix: Interpreter, cmd: Command, cell: Cell) -> None:
 def _cr(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "Attempting to do circular interpolation in a contour which is being defined for more than
     # 2 axes will be flagged as a command error."
+    from omsd.engine.contour import Arc
+
     defn = ix.contour
     assert defn is not None
     if len(defn.axes) != 2:
@@ -110,6 +123,8 @@ def _cx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 
 def run_contour(ix: Interpreter, defn: ContourDefinition, t: float) -> None:
+    from omsd.engine.contour import plan
+
     machine = ix.machine
     tick = machine.clock.at_or_after(t)
     axes = [machine.axes[i] for i in defn.axes]

@@ -7,7 +7,6 @@ from decimal import Decimal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.shared.table import handles
-from omsd.engine.contour import Output
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
 from omsd.protocol.errors import ErrorKind
@@ -23,6 +22,8 @@ def aux(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     code = cmd.mnemonic
     machine = ix.machine
     if ix.contour is not None:
+        from omsd.engine.contour import Output  # (loaded: a contour is being defined)
+
         targets = ix.per_axis(cmd)
         if not targets:
             raise CommandFailed(ErrorKind.MISSING_PARAMETER)
@@ -76,6 +77,8 @@ def _bit(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         raise CommandFailed(ErrorKind.NOT_AN_OUTPUT)
     low = cmd.mnemonic == "BL"
     if ix.contour is not None:
+        from omsd.engine.contour import Output  # (loaded: a contour is being defined)
+
         if not ix.contour.add(Output("bit", bit, low), ix.cost(cell, ix.axis)):
             raise CommandFailed(ErrorKind.CONTOUR_FULL)
         return
