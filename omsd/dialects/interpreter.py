@@ -19,9 +19,9 @@ A dialect with state of its own (stored programs, a table being defined) subclas
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+from omsd.dialects.loopstack import LoopMark, LoopStacks
 from omsd.dialects.operands import CommandFailed, Operands
 from omsd.dialects.registry import AnyHandler, Dialect, prefixes
 from omsd.dialects.words import SyntaxTable, syntax, words_of
@@ -37,8 +37,6 @@ if TYPE_CHECKING:  # contouring is imported when a contour is defined (start-up)
     from omsd.engine.contour import ContourDefinition
 
 __all__ = ["Blocked", "Capture", "CommandFailed", "Interpreter", "LoopMark"]
-
-MAX_LOOP_DEPTH = 4
 
 
 def _motor_fits(motor: str, axis: Axis) -> bool:
@@ -75,13 +73,7 @@ class Capture(Protocol):
         """The capture ended (and the interpreter reads commands again)."""
 
 
-@dataclass(eq=False)  # state, compared by identity (omsd.engine.states)
-class LoopMark:
-    kind: str  # "LS", "WS", "WH"
-    context: str  # axis letter, or "AA" for a loop entered in AA/AM
-
-
-class Interpreter(Operands):
+class Interpreter(Operands, LoopStacks):
     def __init__(self, machine: Machine, dialect: Dialect) -> None:
         model = machine.model
         self.machine = machine
@@ -478,46 +470,3 @@ class Interpreter(Operands):
         for axis, op in items:
             op.source = source
             axis.queue.append(op)
-
-    # -- loops ----------------------------------------------------------------------------------
-
-    def in_loop(self, axes: list[Axis]) -> bool:
-        return any(self.loops[a.index] for a in axes)
-
-    def open_loop(self, kind: str, axes: list[Axis]) -> None:
-        for a in axes:
-            stack = self.loops[a.index]
-            if len(stack) >= MAX_LOOP_DEPTH:
-                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
-            if kind == "WH" and any(m.kind == "WH" for m in stack):
-                raise CommandFailed(ErrorKind.LOOP_TOO_DEEP)
-
-    def push_loop(self, kind: str, axes: list[Axis]) -> None:
-        tag = self.context_tag()
-        for a in axes:
-            self.loops[a.index].append(LoopMark(kind, tag))
-
-    def close_loop(self, kind: str, axes: list[Axis]) -> None:
-        """LE/WD/WG must match the most recent LS/WS/WH entered in the same axis mode:
-        "otherwise the matching loop termination command will not be found"; CMD_S flags "LS
-        and LE commands are not in [matched] pairs"."""
-        tag = self.context_tag()
-        for a in axes:
-            stack = self.loops[a.index]
-            if not stack or stack[-1].kind != kind or stack[-1].context != tag:
-                raise CommandFailed(ErrorKind.LOOP_MISMATCH)
-
-    def pop_loop(self, axes: list[Axis]) -> None:
-        for a in axes:
-            self.loops[a.index].pop()
-
-    def forget_loops(self, index: int) -> None:
-        """The axis queue was flushed: its loops are gone with it."""
-        self.loops[index].clear()
-        self.while_flags.discard(index)
-
-    def take_while_flag(self, index: int) -> bool:
-        if index in self.while_flags:
-            self.while_flags.discard(index)
-            return True
-        return False
