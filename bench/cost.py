@@ -224,6 +224,40 @@ def load_once(n: int, settings: Settings, directory: Path) -> Load:
     )
 
 
+def engine_per_poll(seconds: float) -> float:
+    """CPU seconds per poll of the board engine and link alone, in this process and with no I/O:
+    one board of the load (the same setup, ``QA RP`` every 0.1 s, the moves' deadlines taken as
+    they come) simulated for ``seconds`` on the manual clock; the best of 3. What the load's
+    boards cost before any transport, log or event loop: a floor for the load cost row."""
+    from omsd.board import Board
+    from omsd.link import make_link
+    from omsd.models import get_model
+
+    best = float("inf")
+    for _ in range(3):
+        board = Board(get_model(MODEL), now=0.0)
+        link = make_link("driver", board)
+        rest, t = SETUP, 0.0
+        while rest:
+            rest = rest[link.from_host(rest, t, 1) :]
+            link.to_host(t)
+            t += 0.001
+        polls, next_poll, end = 0, t + PERIOD, t + seconds
+        c0 = time.process_time()
+        while t < end:
+            deadline = link.next_deadline()
+            if deadline is not None and deadline < next_poll:
+                t = max(t, deadline)
+                link.to_host(t)
+                continue
+            t, next_poll = next_poll, next_poll + PERIOD
+            link.from_host(poll_request(polls), t, 1)
+            link.to_host(t)
+            polls += 1
+        best = min(best, (time.process_time() - c0) / polls)
+    return best
+
+
 def load(settings: Settings, directory: Path) -> list[Row]:
     runs = [load_once(n, settings, directory) for n in settings.load_boards]
     rows: list[Row] = []
@@ -246,6 +280,19 @@ def load(settings: Settings, directory: Path) -> list[Row]:
             )
         )
     first, last = runs[0], runs[-1]
+    engine = engine_per_poll(max(2.0, settings.load_seconds * 2))
+    rows.append(
+        Row(
+            f"load cost, {last.boards} boards: the board engine alone / omsd as users run it",
+            "% core",
+            percent(engine * last.polls, last.wall),
+            last.ours,
+            None,
+            f"{1e6 * engine:.1f} µs CPU per poll in process, no I/O (one board of the load on the"
+            f" manual clock, moves included), at the {last.polls / last.wall:.0f} polls/s of"
+            " the row above",
+        )
+    )
     rows.append(
         Row(
             f"load growth, CPU per poll, {last.boards} vs {first.boards} board(s)",

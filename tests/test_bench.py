@@ -65,6 +65,7 @@ ROWS = [
     "mixed pipelined commands, raw link: omsd view off / replay echo",
     "idle cost, 8 boards x 8 axes",
     *(f"load cost, {n} board{'s' * (n > 1)} in motion, polled" for n in QUICK.load_boards),
+    f"load cost, {MOST} boards: the board engine alone / omsd as users run it",
     f"load growth, CPU per poll, {MOST} vs 1 board(s)",
     f"load over time, CPU 2nd / 1st half, {MOST} boards",
     *WATCH,
