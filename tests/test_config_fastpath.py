@@ -4,14 +4,12 @@ exactly the configuration the schema gives; it never accepts what the schema ref
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
+from serve_once import serve_once
 
 from omsd.config import ConfigError, DaemonConfig, fastpath, reading
 
@@ -146,31 +144,12 @@ def test_common_command_lines_take_the_fast_path(args: tuple[object, ...]) -> No
 def test_a_single_board_daemon_starts_without_pydantic(tmp_path: Path) -> None:
     """``omsd --board ... --tcp ... --pty ... --control ...`` from the command line to its
     endpoints up: neither pydantic nor the schema is imported, nor the MQTT client."""
-    code = (
-        "import sys\n"
-        "import omsd.daemon\n"
-        "class Once(omsd.daemon.Daemon):\n"
-        "    async def run(self):\n"
-        "        await self.start()\n"
-        "        await self.stop(quiet=True)\n"
-        "omsd.daemon.Daemon = Once\n"
-        "from omsd import cli\n"
-        f"status = cli.main(['--board', 'PC48-4E', '--tcp', '127.0.0.1:0', '--pty',"
-        f" {str(tmp_path / 'b')!r}, '--control', {str(tmp_path / 'c.sock')!r}, '--state',"
-        f" {str(tmp_path / 'state.json')!r}, '--view', 'plain'])\n"
+    done = serve_once(
+        tmp_path,
+        ["--state", str(tmp_path / "state.json"), "--view", "plain"],
         "print(status, sorted(m for m in sys.modules if m.split('.')[0] in"
         " ('pydantic', 'pydantic_core', 'aiomqtt', 'paho') or m in ('omsd.config.schema',"
-        " 'omsd.mqtt')), file=sys.stderr)\n"
-    )
-    env = {k: v for k, v in os.environ.items() if k != "NOTIFY_SOCKET"}
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-        env=env,
-        cwd=tmp_path,
+        " 'omsd.mqtt')), file=sys.stderr)\n",
     )
     assert done.stderr.strip().splitlines()[-1] == "0 []", done.stderr
     assert " tcp 127.0.0.1:" in done.stdout, done.stdout

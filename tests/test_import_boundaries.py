@@ -5,12 +5,12 @@ loaded once it has run. Timings are the benchmark's (``python -m bench --only st
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from serve_once import serve_once
 
 import omsd.config
 import omsd.link
@@ -142,33 +142,15 @@ def test_a_pc48_daemon_loads_only_what_it_serves_with(tmp_path: Path) -> None:
     """``omsd --board PC48-4E --tcp ... --pty ... --control ...`` (the benchmark's start-up) from
     the command line to its endpoints up: nothing of NOT_FOR_A_PC48 is imported. Each is where it
     is used: a contour defined (CD) loads contouring, a PCIx board the servo loop."""
-    code = (
-        "import sys\n"
-        "import omsd.daemon\n"
-        "class Once(omsd.daemon.Daemon):\n"
-        "    async def run(self):\n"
-        "        await self.start()\n"
-        "        await self.stop(quiet=True)\n"
-        "omsd.daemon.Daemon = Once\n"
-        "from omsd import cli\n"
-        f"status = cli.main(['--board', 'PC48-4E', '--tcp', '127.0.0.1:0', '--pty',"
-        f" {str(tmp_path / 'b')!r}, '--control', {str(tmp_path / 'c.sock')!r}])\n"
+    done = serve_once(
+        tmp_path,
+        [],
         f"print(status, [m for m in {NOT_FOR_A_PC48!r} if m in sys.modules], file=sys.stderr)\n"
         "from omsd.board import Board, Harness\nfrom omsd.models import get_model\n"
         "Harness('PC48-4E').send('AA CD0,0; CE')\n"
         "Board(get_model('PCIX-400'), now=0.0)\n"
         "print(sorted(m for m in ('omsd.engine.contour', 'omsd.engine.servo') if m in"
-        " sys.modules), file=sys.stderr)\n"
-    )
-    env = {k: v for k, v in os.environ.items() if k != "NOTIFY_SOCKET"}
-    done = subprocess.run(
-        [sys.executable, "-c", code],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-        env=env,
-        cwd=tmp_path,
+        " sys.modules), file=sys.stderr)\n",
     )
     assert done.stderr.strip().splitlines()[-2:] == [
         "0 []",

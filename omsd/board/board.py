@@ -29,7 +29,7 @@ from typing import Any
 from omsd.dialects import framing, lookup
 from omsd.dialects.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.engine.axis import Axis
-from omsd.engine.machine import AT_REST_MARGIN, Machine
+from omsd.engine.machine import Machine
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
@@ -170,11 +170,7 @@ class Board(Machine):
         full and more is to come, and at the end ``settle`` and ``advance`` to ``now``. Those
         settles and that advance are made here too, at the same points, unless the machine is
         still at rest there (then they would change nothing)."""
-        # at_rest(now), written out: this is the path a polling client takes every time
-        if not self.settled or self.deadline_stale or self.init_until is not None or now < self.now:
-            return False
-        deadline = self.deadline
-        if deadline is not None and now >= deadline - AT_REST_MARGIN:
+        if not (self.at_rest(now) and now >= self.now and self.init_until is None):
             return False
         interp = self.interpreter
         ready = interp.bare_reports()

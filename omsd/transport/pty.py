@@ -232,11 +232,12 @@ class PtyEndpoint:
         self.service.end_session(self, unsent, "closed")
         if self._watch is not None:
             queued += self._watch.pending()
-        if OPENED not in upcoming + queued and not self._hung_up():
-            self.openers = 1
-            self._connect()
-        elif OPENED not in upcoming + queued:
-            self._unread.clear()  # nobody to give them to (a client that came and went)
+        if OPENED not in upcoming + queued:
+            if not self._hung_up():
+                self.openers = 1
+                self._connect()
+            else:
+                self._unread.clear()  # nobody to give them to (a client that came and went)
         return queued
 
     def _flush_terminal(self) -> list[str]:
