@@ -226,9 +226,10 @@ def load_once(n: int, settings: Settings, directory: Path) -> Load:
 
 def engine_per_poll(seconds: float) -> float:
     """CPU seconds per poll of the board engine and link alone, in this process and with no I/O:
-    one board of the load (the same setup, ``QA RP`` every 0.1 s, the moves' deadlines taken as
-    they come) simulated for ``seconds`` on the manual clock; the best of 3. What the load's
-    boards cost before any transport, log or event loop: a floor for the load cost row."""
+    one board of the load (the same setup, ``QA RP`` every 0.1 s, run at its wake-ups as the
+    daemon runs it: the moves nobody hears happen when the next poll comes) simulated for
+    ``seconds`` on the manual clock; the best of 3. What the load's boards cost before any
+    transport, log or event loop: a floor for the load cost row."""
     from omsd.board import Board
     from omsd.link import make_link
     from omsd.models import get_model
@@ -245,7 +246,7 @@ def engine_per_poll(seconds: float) -> float:
         polls, next_poll, end = 0, t + PERIOD, t + seconds
         c0 = time.process_time()
         while t < end:
-            deadline = link.next_deadline()
+            deadline = link.next_wakeup()  # as the daemon wakes it (omsd.engine.quiet)
             if deadline is not None and deadline < next_poll:
                 t = max(t, deadline)
                 link.to_host(t)

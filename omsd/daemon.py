@@ -467,9 +467,12 @@ class Daemon:
         try:
             await self.start()  # on failure it has already cleaned up, quietly
             sdnotify.ready(f"serving {len(self.endpoints)} endpoint(s)")
+            # while serving, the view's lines are written in batches, off the reply path
+            self.log.batch_view(loop)
             try:
                 await self._stop.wait()
             finally:
+                self.log.unbatch_view()
                 sdnotify.stopping()
                 await self.stop()
         finally:

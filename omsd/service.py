@@ -429,7 +429,16 @@ class BoardService:
         if not self._closed and self.observers:
             for observer in list(self.observers):
                 observer.changed(self)
-        deadline = None if self._closed else self.link.next_deadline()
+        if self._closed:
+            deadline = None
+        elif self.observers or self._waiting or self._lingering:
+            # someone watches the board's every change, a client waits for room, a gone
+            # client's session waits for its motion to end: woken at every deadline
+            deadline = self.link.next_deadline()
+        else:
+            # woken when the host could hear something; what no host can hear until it asks
+            # is let happen, at its own times, when the board is next run (omsd.engine.quiet)
+            deadline = self.link.next_wakeup()
         # when, on the monotonic clock, the board is next to be woken (None: time is paused or
         # nothing happens by itself)
         at = None if deadline is None else self.timebase.to_loop(deadline)

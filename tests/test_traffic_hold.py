@@ -3,7 +3,8 @@ once, and against the log as it was before issue 16.
 
 The service holds the log while it handles a client's bytes or a deadline; the file's lines are
 written by ``write_kept`` (before the turn's replies are sent) or when the outermost hold is
-released, the view's at that release. Whatever the holds and ``write_kept`` calls (none,
+released, the view's at that release (or, batched as the daemon has it while it serves, when the
+batch's time comes). Whatever the holds and ``write_kept`` calls (none,
 nested, around any run of calls, left open at ``close``), the same calls must give the same
 bytes: in the file (its JSON
 lines, across ``reopen`` and a rotation), and on the stream (plain with and without journald
@@ -94,7 +95,7 @@ CALL = st.one_of(
     st.tuples(st.sampled_from(["warning", "error"]), TIME, MESSAGE),
 )
 #: What only the held log does: the holds, nested and released anywhere.
-HOLDS = st.sampled_from([("hold",), ("release",), ("write_kept",)])
+HOLDS = st.sampled_from([("hold",), ("release",), ("write_kept",), ("tick",)])
 #: The file's life: reopened (the daemon's SIGHUP), rotated (renamed, then reopened) or closed.
 LIFE = st.sampled_from([("reopen",), ("rotate",), ("close",)])
 CALLS = st.lists(st.one_of(CALL, CALL, CALL, HOLDS, HOLDS, LIFE), max_size=60)
@@ -114,14 +115,56 @@ class Logs:
         return {p.name: p.read_bytes() for p in sorted(self.directory.iterdir())}
 
 
-def play(log: Any, module: Any, where: Logs, calls: list[tuple[Any, ...]], held: bool) -> int:
+class Loop:
+    """What :meth:`TrafficLog.batch_view` needs of an event loop: ``call_later``, whose calls
+    run when the test says the time has come (:meth:`tick`)."""
+
+    def __init__(self) -> None:
+        self.handles: list[Handle] = []
+
+    def call_later(self, delay: float, callback: Any) -> Handle:
+        assert delay > 0
+        handle = Handle(callback)
+        self.handles.append(handle)
+        return handle
+
+    def tick(self) -> None:
+        handles, self.handles = self.handles, []
+        for handle in handles:
+            if not handle.cancelled:
+                handle.callback()
+
+
+class Handle:
+    def __init__(self, callback: Any) -> None:
+        self.callback = callback
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+def play(
+    log: Any,
+    module: Any,
+    where: Logs,
+    calls: list[tuple[Any, ...]],
+    held: bool,
+    loop: Loop | None = None,
+) -> int:
     """Make ``calls`` on ``log`` (of ``module``, the current one or the one before); the holds
-    only if ``held``. Returns how deep the log is still held."""
+    only if ``held``; the view batched on ``loop`` if given (its time comes at each ``tick``).
+    Returns how deep the log is still held."""
     depth = 0
     direction = module.Direction
+    if loop is not None:
+        log.batch_view(loop)
     for call in calls:
         kind = call[0]
-        if kind == "hold":
+        if kind == "tick":
+            if loop is not None:
+                loop.tick()
+        elif kind == "hold":
             if held:
                 log.hold()
                 depth += 1
@@ -167,13 +210,18 @@ def logs_agree(
     env = {"JOURNAL_STREAM": "1:2"} if journal else {}
     with tempfile.TemporaryDirectory() as directory:
         results = []
-        sides: list[tuple[str, Any, bool]] = [("at-once", now, False), ("held", now, True)]
+        sides: list[tuple[str, Any, bool]] = [
+            ("at-once", now, False),
+            ("held", now, True),
+            ("batched", now, True),
+        ]
         if before is not None:
             sides.append(("before", before, False))
         for name, module, held in sides:
             where = Logs(pathlib.Path(directory), name, TTY() if view == "rich" else io.StringIO())
             log = module.TrafficLog(view, file=where.path, stream=where.stream, env=env)
-            depth = play(log, module, where, calls, held)
+            loop = Loop() if name == "batched" else None
+            depth = play(log, module, where, calls, held, loop)
             if held and depth:
                 # left held at the end: close() writes what is kept
                 log.close()
@@ -291,6 +339,64 @@ def test_write_kept_writes_the_file_now_and_the_view_at_the_release(
         "b [done X]",
     ]
     assert len(path.read_text().splitlines()) == 3  # each line once
+    log.close()
+
+
+def test_a_batched_view_waits_for_its_time_and_the_file_does_not(tmp_path: pathlib.Path) -> None:
+    """The daemon's way while it serves (``batch_view``): the file as before, the view's lines
+    of every turn in one write when the batch's time comes, in order; ``unbatch_view`` and
+    ``close`` write what waits."""
+    out = io.StringIO()
+    path = tmp_path / "t.jsonl"
+    log = TrafficLog("plain", file=path, stream=out, env={}, clock=lambda: 1.0)
+    loop = Loop()
+    log.batch_view(loop)  # type: ignore[arg-type]
+    for n in range(3):
+        log.hold()
+        log.record(Traffic(1.0, "b", "e", Direction.IN, b"RP"))
+        log.write_kept()
+        assert len(path.read_text().splitlines()) == 2 * n + 1  # in the file before the reply
+        log.record(Traffic(1.0, "b", "e", Direction.OUT, b"%d\r\n" % n))
+        log.release()
+        assert len(path.read_text().splitlines()) == 2 * n + 2
+    assert out.getvalue() == "" and len(loop.handles) == 1  # one batch, one timer
+    loop.tick()
+    shown = [line.split(" ", 1)[1] for line in out.getvalue().splitlines()]
+    assert shown == [f"b e {arrow}" for n in range(3) for arrow in ("<- RP", f"-> {n}<CR><LF>")]
+    log.warning("w")
+    assert out.getvalue().count("\n") == 6 and len(loop.handles) == 1
+    log.unbatch_view()
+    assert out.getvalue().endswith(" warning: w\n")
+    log.info("at once")
+    assert out.getvalue().endswith(" at once\n")
+    log.batch_view(loop)  # type: ignore[arg-type]
+    log.event(1.0, "b", "done X")
+    log.close()  # writes what waits
+    assert out.getvalue().endswith(" b [done X]\n")
+    loop.tick()  # the timer was cancelled: nothing twice
+    assert out.getvalue().count("done X") == 1
+
+
+def test_a_batched_view_on_a_real_loop_comes_within_its_batch() -> None:
+    import asyncio
+
+    from omsd.telemetry.traffic import VIEW_BATCH
+
+    out = io.StringIO()
+    log = TrafficLog("plain", stream=out, env={}, clock=lambda: 1.0)
+
+    async def main() -> None:
+        loop = asyncio.get_running_loop()
+        log.batch_view(loop)
+        log.info("one")
+        log.info("two")
+        await asyncio.sleep(0)
+        assert out.getvalue() == ""  # not at once: when the batch's timer comes
+        while not out.getvalue():
+            await asyncio.sleep(VIEW_BATCH / 10)
+
+    asyncio.run(main())
+    assert [line.split(" ", 1)[1] for line in out.getvalue().splitlines()] == ["one", "two"]
     log.close()
 
 

@@ -158,9 +158,11 @@ class Board(Machine):
     def _reports_at_rest(self, data: bytes, now: float) -> bool:
         """Fast path (issue 16): ``data`` is nothing but operand-less reports (``RP``, ``QA``,
         ``?KP``; separators between them), the machine is at rest (:meth:`at_rest`: nothing
-        due, nothing to settle, the interpreter holding nothing) and not initialising. The
-        reports are run here, one after the other, and True returned; otherwise (False)
-        nothing was done and ``receive`` takes the regular way.
+        due, nothing to settle, the interpreter holding nothing) and not initialising, or is
+        so once what is due by ``now`` has happened (a move that ended since the last poll:
+        the regular way's first step, ``advance``, is taken here). The reports are run here,
+        one after the other, and True returned; otherwise (False) nothing but that advance
+        was done and ``receive`` takes the regular way.
 
         Equivalent to the regular way, which would: let time run to ``now`` (nothing is due:
         only the clock moves), put the bytes in the input buffer and ``pump`` them (each word
@@ -171,7 +173,14 @@ class Board(Machine):
         settles and that advance are made here too, at the same points, unless the machine is
         still at rest there (then they would change nothing)."""
         if not (self.at_rest(now) and now >= self.now and self.init_until is None):
-            return False
+            # something is due by now (a move has ended since the last poll): let it happen
+            # first, as the regular way's first step (``advance``) would; at rest after it,
+            # the reports are run here all the same
+            if not (self.settled and now >= self.now):
+                return False
+            self.advance(now)
+            if not (self.at_rest(now) and self.init_until is None):
+                return False
         interp = self.interpreter
         ready = interp.bare_reports()
         entry = ready.get(data) if ready is not None else None

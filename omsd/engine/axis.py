@@ -86,12 +86,12 @@ class Axis(AxisState):
     # -- what happens next --------------------------------------------------------------------
 
     def next_event_time(self) -> float | None:
-        if self._cache is None:
-            self._cache = next_event(self)
-        t = self._cache[0]
+        if self.event is None:
+            self.event = next_event(self)
+        t = self.event[0]
         return None if math.isinf(t) else t
 
     def due(self) -> str:
-        if self._cache is None:
-            self._cache = next_event(self)
-        return self._cache[1]
+        if self.event is None:
+            self.event = next_event(self)
+        return self.event[1]

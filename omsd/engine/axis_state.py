@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from decimal import Decimal
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from omsd.engine import profiles as pf
 from omsd.engine.clock import SampleClock
@@ -146,7 +146,11 @@ class AxisState:
         self.enc_phys = phys
         self.track_enc = 0.0
         self.track_counter = 0.0
-        self._cache: tuple[float, str] | None = None
+        # the axis's next event, (time, kind) as omsd.engine.sensing.next_event finds it (time
+        # inf: none), kept until invalidate(); None: to be found again (Axis.next_event_time)
+        self.event: tuple[float, str] | None = None
+        # where the queue can take the axis, kept by omsd.engine.quiet (its key, then the reach)
+        self.quiet_memo: tuple[Any, ...] | None = None
         self.host.deadline_stale = True
 
     def factory_parameters(self) -> None:
@@ -381,7 +385,7 @@ class AxisState:
     def invalidate(self) -> None:
         """What happens next to the axis is to be found again (and so is the machine's next
         deadline, the earliest of its axes')."""
-        self._cache = None
+        self.event = None
         self.host.deadline_stale = True
 
     def end_tick(self) -> float | None:

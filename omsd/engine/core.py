@@ -54,6 +54,10 @@ class Core:
         # drops its own cached next event (AxisState.invalidate) or init_until changes
         self.deadline_stale = True
         self.deadline: float | None = None
+        # when the board must next be run for its host (Machine.next_wakeup), cached: stale
+        # whenever the deadline is found again or a settle runs
+        self.wakeup_stale = True
+        self.wakeup: float | None = None
         # a settle now would do nothing: the queues and the front ran to a standstill and only
         # time has passed since (Machine.settle sets it; see Machine.at_rest for who clears it)
         self.settled = False

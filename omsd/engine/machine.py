@@ -26,11 +26,13 @@ from omsd.engine.extensions import BARE, Framing, Options
 from omsd.engine.ops_flow import FLOW_OPS
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.ops_parameters import PARAMETER_OPS
+from omsd.engine.quiet import QUIET_OPS, quiet
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
 
 MAX_EVENTS_PER_ADVANCE = 1_000_000
+INF = float("inf")
 
 #: How far before its next deadline a machine counts as at rest (:meth:`Machine.at_rest`): a
 #: timed wait is over from ``until - 1e-12`` (``Executor._satisfied``), so a settle that close to
@@ -60,6 +62,11 @@ class Machine(Core):
     ) -> None:
         super().__init__(model, now, world, framing, options or Options(), fast_paths)
         self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
+        # the quiet commands (omsd.engine.quiet) that run the engine's own code on this board
+        own = ops or {}
+        self._quiet_codes = frozenset(
+            code for code in QUIET_OPS if own.get(code, ENGINE_OPS[code]) is ENGINE_OPS[code]
+        )
         self.power_up(now)
 
     # -- power ----------------------------------------------------------------------------------
@@ -112,6 +119,46 @@ class Machine(Core):
             return self.now
         return t
 
+    def next_wakeup(self) -> float | None:
+        """When the board must next be run so that its host hears everything on time: the
+        earliest deadline of the axes that are not quiet (:mod:`omsd.engine.quiet`), or INIT's
+        end; ``None`` if nothing it does by itself can be heard until it is changed from
+        outside. Deadlines before it may be left until the board is next run anyway (a command,
+        a change of the world, a later wake-up): the board then lets them happen at their own
+        times, with the same result. Without the fast paths, :meth:`next_deadline`."""
+        if not self.fast_paths:
+            return self.next_deadline()
+        deadline = self._next_internal()
+        if self.wakeup_stale:
+            self.wakeup = self._find_wakeup(deadline)
+            self.wakeup_stale = False
+        t = self.wakeup
+        if t is not None and t <= self.now:
+            return self.now
+        return t
+
+    def _find_wakeup(self, deadline: float | None) -> float | None:
+        if (
+            deadline is None
+            or not self.settled
+            or self.init_until is not None
+            or self.executor.sensor_hooks
+            or self.contour is not None
+        ):
+            return deadline
+        axes = self.axes
+        if any(axis.gear is not None for axis in axes):
+            return deadline
+        codes = self._quiet_codes
+        best: float | None = None
+        for axis in axes:
+            event = axis.event
+            t = axis.next_event_time() if event is None else event[0]
+            if t is None or t == INF or (best is not None and t >= best) or quiet(axis, codes):
+                continue
+            best = t
+        return best
+
     def _next_internal(self) -> float | None:
         """The earliest of the axes' next events and the end of INIT. Cached: found again only
         when an axis has dropped its own cached next event (``deadline_stale``), so that a
@@ -119,11 +166,13 @@ class Machine(Core):
         if self.deadline_stale or not self.fast_paths:
             best = self.init_until
             for axis in self.axes:
-                t = axis.next_event_time()
-                if t is not None and (best is None or t < best):
+                event = axis.event  # (read without a call where it is known)
+                t = axis.next_event_time() if event is None else event[0]
+                if t is not None and t != INF and (best is None or t < best):
                     best = t
             self.deadline = best
             self.deadline_stale = False
+            self.wakeup_stale = True
         return self.deadline
 
     def at_rest(self, now: float) -> bool:
@@ -154,6 +203,9 @@ class Machine(Core):
             self.deadline_stale = True
         ex = self.executor
         for axis in self.axes:
+            event = axis.event
+            if event is not None and event[0] > t:
+                continue  # nothing due (read without a call where it is known)
             self.talker = axis.source  # what happens to an axis is the business of its mover
             for _ in range(64):
                 when = axis.next_event_time()
@@ -185,6 +237,7 @@ class Machine(Core):
         front = self.front
         skip_idle = self.fast_paths
         self.settled = False
+        self.wakeup_stale = True
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:

@@ -107,7 +107,15 @@ class Link(Protocol):
         """Run the board up to ``now``; what the host is to read, and the events."""
         ...
 
-    def next_deadline(self) -> float | None: ...
+    def next_deadline(self) -> float | None:
+        """When the board next changes by itself (``None``: never on its own)."""
+        ...
+
+    def next_wakeup(self) -> float | None:
+        """When the board must next be run for the host to hear everything on time
+        (:meth:`omsd.engine.machine.Machine.next_wakeup`): no later than :meth:`next_deadline`
+        while the link itself holds anything for the board."""
+        ...
 
     def room(self, session: int = 0) -> int:
         """How many more host bytes :meth:`from_host` would take now from ``session``."""

@@ -310,6 +310,12 @@ class DriverLink:
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
 
+    def next_wakeup(self) -> float | None:
+        if self._pending or self._waiting is not None:
+            # bytes held for the board, or a wait character: each deadline may let them on
+            return self.board.next_deadline()
+        return self.board.next_wakeup()
+
     def _collect(self, now: float) -> bool:
         """The board's output to the pieces and events; True if the board was asked something
         (an event's registers were read), so that it may have said more."""

@@ -56,6 +56,9 @@ class RawLink:
     def next_deadline(self) -> float | None:
         return self.board.next_deadline()
 
+    def next_wakeup(self) -> float | None:
+        return self.board.next_wakeup()
+
     def room(self, session: int = 0) -> int:
         return self.board.input_room(session)
 

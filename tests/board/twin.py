@@ -149,7 +149,7 @@ def _axis(a: Axis, now: float) -> tuple[Any, ...]:
         a.motion,
         (traj.t0, traj.x0, traj.final, traj.end_time, len(traj.pieces)),
         (traj.position(now), traj.velocity(now)),
-        a._cache,
+        a.event,
         a.source,
         (a.done, a.direction, a.slipped, a.hold, a.in_position, a.limit_latched),
         (a.vl, a.ac, a.vb, a.aux, a.aux_timer, a.in_fire, a.sensor_check),

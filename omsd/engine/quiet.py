@@ -1,0 +1,173 @@
+"""Quiet axes: an axis whose coming events no host can notice unless it asks (issue 16).
+
+A board's deadlines (:meth:`~omsd.engine.machine.Machine.next_deadline`) are every instant at
+which it changes by itself: each move's first sample (a look at the switches), each move's end,
+each timed wait running out. The daemon used to wake at every one of them. Most say nothing: an
+axis running a queue of moves ends one, starts the next, and nobody hears of it until they ask
+for its position. What can be heard without asking is the board's output (a done, a limit, a
+slip, a servo trip, an error) and what a deadline does to the input (room for held commands).
+
+An axis is *quiet* when, from now until its state is next changed from outside (a command, a
+change of the world, a reset: each of which runs the board and finds its wake-up again), nothing
+it does can be heard: its motion and the queued commands after it are plain moves, jogs, timed
+waits and their parameters (:data:`QUIET_OPS`, the engine's own, never a dialect's replacement,
+none of them in a group with other axes), and none of its reactions can fire: no switch within
+reach of where the queue takes it (the whole queue's reach, not only the running move's: the
+limit a later move would hit must not be learnt late), no home search, no slip detection, no
+position hold, no backlash, no servo loop, no aux output or scheduled output, no armed
+interrupt, no gearing on the board, no look of the dialect's own at the sensors. Whatever a
+quiet axis does meanwhile, the board does at its exact time when it is next run (the engine is
+pure: running it to ``t`` at once or deadline by deadline is the same), so replies and state are
+those of a board woken at every deadline.
+
+:meth:`~omsd.engine.machine.Machine.next_wakeup` is the earliest deadline of the axes that are
+not quiet. Everything here is conservative: an axis that might be heard is not quiet, and the
+board is woken at its every deadline, as before.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+
+from omsd.engine.axis import Axis
+from omsd.engine.queue import Op
+from omsd.engine.states import Motion
+from omsd.engine.world import LimitWiring
+
+#: Queued commands after which an axis stays quiet: moves, jogs, timed waits and the parameters
+#: of moves (PC48 §6.5-§6.8, §6.10 WT). None says anything, reads an input or drives an output.
+QUIET_OPS = frozenset({"MA", "MT", "MR", "ML", "GO", "JG", "JF", "WT", "VL", "AC", "VB", "NOP"})
+MOVE_TO = frozenset({"MA", "MT"})
+MOVE_BY = frozenset({"MR", "ML"})
+JOGS = frozenset({"JG", "JF"})
+#: Motions a quiet axis may be in (not a home search, a hold, a contour, a servo's own).
+QUIET_MOTIONS = frozenset({Motion.IDLE, Motion.MOVE, Motion.JOG, Motion.STOP})
+#: How far inside its limit switches (steps) the whole reach of a quiet axis must stay: the
+#: switches are seen on whole steps, and a move's target is truncated to one.
+SWITCH_MARGIN = 2.0
+
+
+def quiet(axis: Axis, codes: Collection[str]) -> bool:
+    """Whether nothing ``axis`` does until it is next changed from outside can be heard (see the
+    module text); ``codes``: the :data:`QUIET_OPS` that run the engine's own code on this
+    board."""
+    if axis.motion not in QUIET_MOTIONS:
+        return False
+    if (
+        axis.home is not None
+        or axis.slip_detect
+        or axis.stall_phys is not None
+        or axis.hold
+        or axis.servo is not None
+        or axis.pa is not None
+        or axis.aux_timer is not None
+        or axis.outputs
+        or axis.in_arm is not None
+        or axis.in_fire is not None
+        or axis.travel_limits is not None
+        or axis.backlash  # the carriage is then apart from the counter by up to that much
+    ):
+        return False
+    wait = axis.wait
+    if wait is not None and (
+        wait.kind not in ("motion", "time") or wait.then is not None or wait.jump is not None
+    ):
+        return False
+    reach = _reach(axis, codes, skip_current=wait is not None)
+    if reach is None:
+        return False
+    if not axis.limits_on:
+        return True
+    w = axis.world
+    if w.limit_switches is not LimitWiring.MATCHED:
+        return False  # a line that reads as a limit away from the switches too
+    world = axis.host.world
+    index = axis.index
+    if world.forced_limit(index, 1) is not None or world.forced_limit(index, -1) is not None:
+        return False
+    lowest, highest = reach
+    offset = axis.phys_offset
+    return (
+        lowest + offset > w.negative_limit + SWITCH_MARGIN
+        and highest + offset < w.positive_limit - SWITCH_MARGIN
+    )
+
+
+def _reach(axis: Axis, codes: Collection[str], skip_current: bool) -> tuple[float, float] | None:
+    """The lowest and highest position (counter frame) the axis's motion and its queued
+    commands can take it to (``-inf`` or ``inf`` on the side a jog heads to, or everywhere once
+    a move starts from where a jog stopped); ``None`` if a command is not quiet.
+
+    Kept on the axis (``AxisState.quiet_memo``) for as long as the motion, the move set up,
+    the queue's ends and its program counter are the same (objects, compared by identity:
+    they are state): a board polled between two of its deadlines asks again and again, and
+    the queue (up to hundreds of commands) is read once a move."""
+    traj = axis.traj
+    pending = axis.pending
+    queue = axis.queue
+    program = queue.program
+    pc = queue.pc + (1 if skip_current else 0)
+    n = len(program)
+    first = program[pc] if pc < n else None
+    last = program[-1] if n else None
+    memo = axis.quiet_memo
+    if (
+        memo is not None
+        and memo[0] is traj
+        and memo[1] is pending
+        and memo[2] is first
+        and memo[3] is last
+        and memo[4] == n - pc
+        and memo[5] == axis.ratio
+        and memo[6] is codes
+    ):
+        reach: tuple[float, float] | None = memo[7]
+        return reach
+    reach = _scan(axis, codes, program, pc, n)
+    axis.quiet_memo = (traj, pending, first, last, n - pc, axis.ratio, codes, reach)
+    return reach
+
+
+def _scan(
+    axis: Axis, codes: Collection[str], program: list[Op], pc: int, n: int
+) -> tuple[float, float] | None:
+    traj = axis.traj
+    lowest, highest = traj.extent()
+    position = traj.final if traj.is_finite else math.nan
+    to_motor = axis.to_motor
+    trunc = math.trunc
+    pending = axis.pending
+    target: float | None = None
+    if pending is not None:
+        if pending.linear is not None:
+            return None
+        steps = trunc(to_motor(pending.value))
+        target = float(steps) if pending.kind == "abs" else position + steps
+    for i in range(pc, n):
+        op = program[i]
+        code = op.code
+        if code not in codes or op.group is not None:
+            return None
+        if code in MOVE_BY:  # Executor.start_pending's arithmetic
+            target = position + trunc(to_motor(op.args[0]))
+        elif code in MOVE_TO:
+            target = float(trunc(to_motor(op.args[0])))
+        elif code == "GO":
+            if target is not None:
+                position = target
+                if math.isnan(position):  # a move by so much from where a jog stopped
+                    lowest, highest = -math.inf, math.inf
+                elif position < lowest:
+                    lowest = position
+                elif position > highest:
+                    highest = position
+                target = None
+        elif code in JOGS:
+            v = op.args[0]
+            if v > 0:
+                highest = math.inf
+            elif v < 0:
+                lowest = -math.inf
+            position = math.nan  # where a jog stops is not known before it does
+    return lowest, highest

@@ -1,0 +1,109 @@
+"""The daemon wakes a board only when its host could hear something (issue 16: the services
+arm their timers at ``link.next_wakeup``; :mod:`omsd.engine.quiet`), on a daemon served in this
+process.
+
+A client's queue of plain moves arms no wake-up: the moves run at their own times, and a poll
+afterwards finds the axis where the manual's profiles put it. An ID queued after them arms one
+at once, for the end of the last move, and the done comes then. Someone watching the board (an
+observer: the MQTT bridge, a control client's subscription) is woken at every deadline, as
+before.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from omsd.config import BoardConfig, TcpEndpoint
+from omsd.daemon import Daemon
+from omsd.service import BoardService
+
+from .inprocess import WAIT, serving
+
+
+def board(name: str) -> BoardConfig:
+    return BoardConfig(
+        name=name, model="PC48-4", link="driver", tcp=(TcpEndpoint("127.0.0.1", 0, False),)
+    )
+
+
+async def connect(daemon: Daemon, name: str) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+    (endpoint,) = [e for e in daemon.endpoints if e.board == name and e.kind == "tcp"]
+    port = int(endpoint.address.rsplit(":", 1)[1])
+    return await asyncio.open_connection("127.0.0.1", port)
+
+
+def service_of(daemon: Daemon, name: str) -> BoardService:
+    (service,) = [s for s in daemon.services if s.name == name]
+    return service
+
+
+async def ask(
+    reader: asyncio.StreamReader, writer: asyncio.StreamWriter, data: bytes, lines: int = 1
+) -> bytes:
+    writer.write(data)
+    await writer.drain()
+    out = b""
+    for _ in range(lines):
+        out += await asyncio.wait_for(reader.readline(), WAIT)
+    return out
+
+
+async def test_queued_moves_arm_no_wakeup_and_a_done_after_them_does() -> None:
+    async with serving(board("q1")) as daemon:
+        service = service_of(daemon, "q1")
+        reader, writer = await connect(daemon, "q1")
+        try:
+            # 0.18 s a move: 300 steps with AC40000 never reach VL4000 (a triangle, 0.087 s up
+            # and as long down)
+            await ask(reader, writer, b"AZ VL4000 AC40000 MR300 GO MR-300 GO MR300 GO WY\n")
+            assert service.link.next_deadline() is not None  # the moves' ends...
+            assert service._timer is None  # ...wake nobody
+            await asyncio.sleep(1.0)  # the three moves are over
+            assert await ask(reader, writer, b"AZ RP\n") == b"300\n"
+            assert service._timer is None
+            await ask(reader, writer, b"AZ MR-300 GO MR300 GO WY\n")
+            assert service._timer is None
+            loop = asyncio.get_running_loop()
+            await ask(reader, writer, b"AZ ID WY\n")  # from now on the axis is heard
+            end = service.link.next_deadline()
+            assert service._timer is not None and end is not None
+            assert service._timer_at == service.timebase.to_loop(end)
+            # the done: the driver's "!" and the done flag register's byte, when the last
+            # move ends (the timing itself is the benchmark's: bench/fidelity.py)
+            marker = await asyncio.wait_for(reader.readline(), WAIT)
+            assert marker == b"!\x04\n"  # Z's done flag
+            assert loop.time() >= service.timebase.to_loop(end)
+            assert await ask(reader, writer, b"AZ RP\n") == b"300\n"
+        finally:
+            writer.close()
+
+
+async def test_an_observer_wakes_the_board_at_every_deadline() -> None:
+    class Watcher:
+        changes = 0
+
+        def traffic(self, service: BoardService, record: object) -> None:
+            pass
+
+        def event(self, service: BoardService, when: float, event: object) -> None:
+            pass
+
+        def changed(self, service: BoardService) -> None:
+            self.changes += 1
+
+    async with serving(board("q2")) as daemon:
+        service = service_of(daemon, "q2")
+        watcher = Watcher()
+        service.observers.append(watcher)  # type: ignore[arg-type]
+        reader, writer = await connect(daemon, "q2")
+        try:
+            await ask(reader, writer, b"AZ VL4000 AC40000 MR300 GO MR-300 GO WY\n")
+            deadline = service.link.next_deadline()
+            assert deadline is not None
+            assert service._timer_at == service.timebase.to_loop(deadline)
+            seen = watcher.changes
+            await asyncio.sleep(1.0)
+            assert watcher.changes >= seen + 2  # each move's end, as it came
+        finally:
+            service.observers.remove(watcher)  # type: ignore[arg-type]
+            writer.close()
