@@ -5,7 +5,9 @@
   ``board.take_output``, the two calls of ``Harness.send``): ``RP`` and ``QA`` to a PC48-4E,
   ``?KP`` to a PCIX-400. Nanoseconds per command, the best of :data:`REPEATS` rounds. The
   baseline is the least a Python interpreter of those queries can do: a dict from the command's
-  bytes to a function that formats the reply, and a list for the output. Target: <= 1 µs.
+  bytes to a function that formats the reply, and a list for the output. Target: <= 1 µs. The
+  boards are at rest, so they answer from the replies they keep (``Board._reports_at_rest``);
+  an info row gives ``RP`` with another axis jogging, where every report is run.
 * Motion on the manual clock (moved here from ``tests/board/test_motion.py``, which now counts
   deadlines instead of timing them): a ten-minute move (``VL1000 AC10000 MR600000``) and a
   ten-minute jog then ``ST``, simulated deadline by deadline (``Harness.until``). The card's
@@ -39,10 +41,12 @@ def per_command(step: Callable[[], object], n: int) -> float:
     return best
 
 
-def omsd_step(command: str, model: str) -> Callable[[], object]:
+def omsd_step(command: str, model: str, setup: str = "") -> Callable[[], object]:
     from omsd.board.harness import Harness  # only this benchmark needs omsd's engine
 
     h = Harness(model)
+    if setup:
+        h.send(setup)
     data = command.encode()
     first = h.send(data)
     if not first or b"#" in first:
@@ -120,6 +124,21 @@ def run(settings: Settings, directory: Path) -> list[Row]:
                 else "",
             )
         )
+    # the same with another axis jogging: nothing may be kept (an answer could depend on the
+    # time), every report is run (the at-rest fast path all the same: the jog's next event is
+    # its switch, far away)
+    ours = per_command(omsd_step("RP", "PC48-4E", "AY JG2000 AX"), n)
+    theirs = per_command(baseline_step("RP"), n)
+    rows.append(
+        Row(
+            "interpreter step in process: RP (PC48-4E), another axis jogging / dict dispatch",
+            "ns",
+            ours * 1e9,
+            theirs * 1e9,
+            None,
+            "no reply kept while an axis moves: the report is run each time",
+        )
+    )
     times = [motion() for _ in range(3)]
     move, jog = min(t[0] for t in times), min(t[1] for t in times)
     rows += [

@@ -58,6 +58,7 @@ ROWS = [
     "interpreter step in process: RP (PC48-4E) / dict dispatch",
     "interpreter step in process: QA (PC48-4E) / dict dispatch",
     "interpreter step in process: ?KP (PCIX-400) / dict dispatch",
+    "interpreter step in process: RP (PC48-4E), another axis jogging / dict dispatch",
     "ten-minute move simulated on the manual clock (Harness)",
     "ten-minute jog and its stop simulated on the manual clock (Harness)",
     "pipelined RP, tcp, one board: omsd as users run it / count echo",

@@ -29,6 +29,7 @@ from typing import Any
 from omsd.dialects import framing, lookup
 from omsd.dialects.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.engine.axis import Axis
+from omsd.engine.events import Reply
 from omsd.engine.machine import Machine
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
@@ -65,6 +66,15 @@ class Board(Machine):
         self.dialect = dialect
         self.interpreter: Interpreter = dialect.interpreter(self, dialect)
         self.front = self.interpreter
+        # replies at rest (issue 16; _reports_at_rest): what each pure report said, by its
+        # bytes, good while rest_epoch is _replies_epoch
+        self.pure_reports: frozenset[str] = dialect.pure_reports
+        """The reports that change nothing on this board (``Dialect.pure_reports``, less those
+        that run a servo loop where there is one)."""
+        if any(axis.servo is not None for axis in self.axes):
+            self.pure_reports -= dialect.loop_reports
+        self._replies: dict[bytes, tuple[bytes, bytes | None]] = {}
+        self._replies_epoch = -1
         self.power_up(now)
 
     # -- power ----------------------------------------------------------------------------------
@@ -80,6 +90,7 @@ class Board(Machine):
         values, and the stored programs, as the dialect keeps them (the PCIx; the older boards
         keep nothing in flash). Returns the saved values skipped because they do not fit."""
         self.settled = False
+        self.rest_epoch += 1
         return self.interpreter.load_flash()
 
     # -- the data port ------------------------------------------------------------------------
@@ -97,6 +108,7 @@ class Board(Machine):
         if self.fast_paths and source == self.input_source and self._reports_at_rest(data, now):
             return len(data)
         self.settled = False
+        self.rest_epoch += 1
         self.advance(now)
         interp = self.interpreter
         buffer = interp.buffer
@@ -171,7 +183,27 @@ class Board(Machine):
         and it leaves the interpreter holding nothing), ``settle`` each time the buffer is
         full and more is to come, and at the end ``settle`` and ``advance`` to ``now``. Those
         settles and that advance are made here too, at the same points, unless the machine is
-        still at rest there (then they would change nothing)."""
+        still at rest there (then they would change nothing).
+
+        **Replies at rest**: a pure report (``Dialect.pure_reports``: it changes nothing, so
+        run again it says the same) run here on a board where nothing moves and nothing will
+        happen by itself (no deadline, every axis idle: no answer depends on the time) is
+        kept, by its bytes; asked again while nothing has changed (``rest_epoch``: every
+        settle, every clearing of ``settled``, every register access and every report here
+        that is not pure counts one), the same reply is given at once."""
+        replies = self._replies
+        if (
+            replies
+            and self._replies_epoch == self.rest_epoch
+            and now >= self.now
+            and (kept := replies.get(data)) is not None
+        ):
+            self.now = now
+            self.talker = talker = self.input_source
+            self.interpreter.depth = 0
+            self._output.append(Reply(now, kept[0], kept[1]))
+            self._sources.append(talker)
+            return True
         if not (self.at_rest(now) and now >= self.now and self.init_until is None):
             # something is due by now (a move has ended since the last poll): let it happen
             # first, as the regular way's first step (``advance``) would; at rest after it,
@@ -189,18 +221,24 @@ class Board(Machine):
             self.now = now
             self.talker = self.input_source
             interp.depth = 0
+            said = len(self._output)
             try:
                 handler(interp, command, cell, now)
             except Blocked as exc:
                 raise AssertionError(f"{command.mnemonic}, a report, waited") from exc
             except (CommandFailed, OperandError) as exc:
                 self.command_error(exc.kind, command.text, now)
+            if command.mnemonic not in self.pure_reports:
+                self.rest_epoch += 1  # it may have changed what a report says
+            elif self.settled and not self.deadline_stale and self.deadline is None:
+                self._keep_reply(data, said)
             if self.settled and not self.deadline_stale:
                 return True  # still at rest: its deadline is the one at_rest looked at
         elif (word := (words := interp.report_words).get(data)) is not None:
             # one word not ready here (a check fails: run_bare says why)
             self.now = now
             self.talker = self.input_source
+            self.rest_epoch += 1
             if not interp.run_bare(word, now):
                 raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
             if self.settled and not self.deadline_stale:
@@ -211,6 +249,7 @@ class Board(Machine):
                 return False
             self.now = now
             self.talker = self.input_source
+            self.rest_epoch += 1
             full = interp.capacity  # where the regular way finds the buffer full, and settles
             for end, word in found:
                 while full < end:
@@ -223,6 +262,19 @@ class Board(Machine):
             self.settle(now)
             self.advance(now)
         return True
+
+    def _keep_reply(self, data: bytes, said: int) -> None:
+        """Keep the reply of the pure report ``data`` just run (see :meth:`_reports_at_rest`),
+        if it was one reply and no answer can depend on the time."""
+        out = self._output
+        if len(out) != said + 1 or type(reply := out[-1]) is not Reply or self.interpreter.echo:
+            return
+        if any(axis.motion is not Motion.IDLE for axis in self.axes):
+            return
+        if self._replies_epoch != self.rest_epoch:
+            self._replies = {}
+            self._replies_epoch = self.rest_epoch
+        self._replies[data] = (reply.data, reply.text)
 
     def input_room(self, source: int | None = None) -> int:
         """Characters the input buffer can take now (what a host sees as TBE_S); for

@@ -53,6 +53,11 @@ class Dialect:
     check_fields: Callable[[Command], None] | None = None
     #: queue cost: an axis's own encoder decides the feedback column (else the board's option)
     feedback_per_axis: bool = False
+    #: the reports that change nothing at all (``omsd.dialects.shared.table.PURE_REPORTS``)
+    pure_reports: frozenset[str] = frozenset()
+    #: those of them that run a servo loop up to the moment they are asked (the encoder's
+    #: count): not pure on a board with servo axes (``Board.pure_reports``)
+    loop_reports: frozenset[str] = frozenset()
 
 
 _DIALECTS: dict[str, Dialect] = {}

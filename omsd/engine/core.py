@@ -61,6 +61,11 @@ class Core:
         # a settle now would do nothing: the queues and the front ran to a standstill and only
         # time has passed since (Machine.settle sets it; see Machine.at_rest for who clears it)
         self.settled = False
+        # how many times the machine may have changed otherwise than by time passing: bumped
+        # wherever ``settled`` is cleared, by every settle, a register read or write and a
+        # report that changes something (Board._reports_at_rest); the replies a board at rest
+        # keeps are good for one count (Board._replies)
+        self.rest_epoch = 0
         self.options = options
         self.framing = framing
         # the flash (non-volatile store) of a card that has one: saved power-up defaults (None:

@@ -85,6 +85,7 @@ class Machine(Core):
         self.init_until = None
         self.deadline_stale = True
         self.settled = False
+        self.rest_epoch += 1
         self.front.power_up()
 
     def reset(self, t: float) -> None:
@@ -237,6 +238,7 @@ class Machine(Core):
         front = self.front
         skip_idle = self.fast_paths
         self.settled = False
+        self.rest_epoch += 1
         self.wakeup_stale = True
         for _ in range(10_000):
             progressed = False
@@ -258,6 +260,7 @@ class Machine(Core):
     def read_status_register(self, now: float) -> int:
         """Read offset 3; DON_S, CMD_S, ENC_S and OVRT reset on read (PC48 §3.4.4)."""
         self.advance(now)
+        self.rest_epoch += 1
         value = self.status_register(now)
         self.registers.clear_on_status_read()
         return value
@@ -265,10 +268,12 @@ class Machine(Core):
     def read_done_register(self, now: float) -> int:
         """Read offset 1: "This register is cleared automatically after it is read.\""""
         self.advance(now)
+        self.rest_epoch += 1
         return self.registers.read_done()
 
     def write_control_register(self, value: int, now: float) -> None:
         self.advance(now)
+        self.rest_epoch += 1
         self.registers.control = value & 0xF0
 
     def read_control_register(self, now: float) -> int:
@@ -277,6 +282,7 @@ class Machine(Core):
     def write_vector_register(self, value: int, now: float) -> None:
         """VME boards (VS4): "Interrupt Vector", a read/write byte returned during IACK."""
         self._need_vector()
+        self.rest_epoch += 1
         self.registers.vector = value & 0xFF
 
     def read_vector_register(self, now: float) -> int:
@@ -319,6 +325,7 @@ class Machine(Core):
     def wire_input_to_aux(self, bit: int, axis: str | None) -> None:
         """Wire an axis's open-collector auxiliary output to a general-purpose input."""
         self.settled = False  # a wait for the input may be over: the next settle sees
+        self.rest_epoch += 1
         if axis is None:
             self.world.aux_wiring.pop(bit, None)
         else:

@@ -31,7 +31,7 @@ from hypothesis import strategies as st
 from robustness import test_sessions as robust_sessions
 from robustness.conftest import long_pass
 from robustness.fuzz import ALL_MODELS, command_soup
-from twin import Twin
+from twin import Twin, state
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
@@ -176,6 +176,108 @@ def test_random_streams_say_the_same_with_and_without_fast_paths(
         play(model, steps)
 
     streams()
+
+
+#: What changes a board at rest between two reports: an axis given a position of its own, a
+#: jog with the switches off (motion with no deadline), its stop, a move, a flag reset.
+AT_REST = [
+    "AX;LP11;AY;LP-22;AZ;LP33;AT;LP-44;AX;",
+    "AY;LF;VL300;AC3000;JG300;",
+    "AY;ST;",
+    "AZ;VL5000;AC50000;MR7;GO;ID;",
+    "AX;RA;",
+    "AA;",
+    "AM;",
+    "AT;",
+]
+REST_STEP = st.one_of(
+    st.tuples(st.just("word"), st.integers(0, 2**32 - 1)),
+    st.tuples(st.just("word"), st.integers(0, 2**32 - 1)),
+    st.tuples(st.just("word"), st.integers(0, 2**32 - 1)),
+    st.tuples(st.just("statement"), st.integers(0, len(AT_REST) - 1)),
+    st.tuples(st.just("world"), st.integers(0, 2**32 - 1)),
+    st.tuples(st.just("registers"), st.just(0)),
+    st.tuples(st.just("time"), st.sampled_from([0.0, 1e-3, 0.05, 1.0])),
+)
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "PC48-8", "PCIX-400", "VS4-040", "PC46-4E"])
+def test_replies_at_rest_say_what_the_board_says(
+    model: str, request: pytest.FixtureRequest
+) -> None:
+    """Reports one at a time, as a client polls, on a board at rest whose axes stand at
+    positions of their own, between axis selections, flag resets, a jog with no deadline,
+    world changes and register reads: the replies a board at rest keeps
+    (``Board._reports_at_rest``) must always be what the straightforward board says. 100
+    streams a model; ``--long``: 2,000."""
+
+    @settings(
+        max_examples=2000 if long_pass(request.config) else 100,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
+    @given(steps=st.lists(REST_STEP, min_size=4, max_size=40))
+    def streams(steps: list[tuple[Any, ...]]) -> None:
+        twin = Twin(get_model(model), world=WORLD)
+        now = 0.0
+        twin.receive(AT_REST[0].encode(), now, 1)
+        words = sorted(twin.fast.interpreter.words.reports)
+        polled = [w for w in (b"RP", b"QA", b"RE", b"?KP") if w in words]
+        for step in steps:
+            kind = step[0]
+            if kind == "word":
+                rng = random.Random(step[1])
+                twin.receive(rng.choice(polled if rng.random() < 0.6 else words), now, 1)
+            elif kind == "statement":
+                twin.receive(AT_REST[step[1]].encode(), now, 1)
+            elif kind == "world":
+                world_change(twin, random.Random(step[1]), now)
+            elif kind == "registers":
+                twin.read_status_register(now)
+            else:
+                now += step[1]
+                while (d := twin.next_deadline()) is not None and d <= now:
+                    twin.advance(d)
+            twin.take_output_sourced()
+
+    streams()
+
+
+def test_a_reply_at_rest_is_kept_and_given_again() -> None:
+    """The replies at rest are really kept (a change that stopped keeping them would pass the
+    rest): asked again, a pure report is answered without its handler."""
+    board = Board(get_model("PC48-4E"))
+    board.receive(b"AY;LP-22;", 0.0)
+    assert board.take_bytes() == b""
+    board.receive(b"RP", 1.0)
+    assert board.take_bytes() == b"\n\r-22\n\r"
+    assert b"RP" in board._replies
+    entry = board.interpreter.bare_reports()
+    assert entry is not None
+    handler_calls = []
+    original = entry[b"RP"]
+    entry[b"RP"] = (lambda *a: handler_calls.append(a), *original[1:])
+    try:
+        board.receive(b"RP", 2.0)
+        assert board.take_bytes() == b"\n\r-22\n\r" and not handler_calls
+        board.receive(b"AX", 2.0)  # another axis: not pure, nothing kept is good any more
+        assert not board._replies or board._replies_epoch != board.rest_epoch
+    finally:
+        entry[b"RP"] = original
+
+
+def test_no_reply_is_kept_while_an_axis_moves_with_no_deadline() -> None:
+    """A jog with the switches off has no deadline at all: the board is at rest in
+    ``at_rest``'s sense while the position runs on, so no reply of it may be kept."""
+    twin = Twin(get_model("PC48-4E"))
+    twin.receive(b"AY;LF;VL300;AC3000;JG300;", 0.0, 1)
+    twin.advance(0.5)
+    assert twin.next_deadline() is None
+    answers = []
+    for t in (1.0, 2.0, 2.0):
+        twin.receive(b"RP", t, 1)
+        answers.append(twin.take_bytes())
+    assert answers == [b"\n\r285\n\r", b"\n\r585\n\r", b"\n\r585\n\r"]
 
 
 @pytest.mark.parametrize("model", ["PC48-8", "PCIX-400"])
@@ -323,6 +425,55 @@ def test_every_report_leaves_the_interpreter_holding_nothing(model: str) -> None
             assert board.at_rest(1.0) or board.deadline_stale, (word, mode)
             assert command.mnemonic in board.dialect.reports
             board.take_output()
+
+
+#: States a pure report is run in: at rest, after moves and a slip, with limits and encoders.
+PURE_SETUPS = [
+    "",
+    "AX;VL5000;AC50000;MR3000;GO;ID;AY;JG2000;",
+    # a done flag and a limit (RA and RI reset them)
+    "AX;VL5000;AC50000;MR10;GO;ID;AY;VL5000;AC50000;MR700;GO;AX;",
+    # slip detected on X (EA resets it), an encoder ratio on Y
+    "AX;ES5;IS;AY;ER3,2;LP30000;AZ;VL1000;MR-200;GO;AX;",
+    "AA;",
+    "AM;",
+]
+
+
+def _lasting(board: Board) -> dict[str, Any]:
+    """The board's state but the time, who spoke last and what is kept only to be found
+    faster (each axis's next event, found when asked)."""
+    board.next_deadline()
+    return {k: v for k, v in state(board).items() if k not in ("now", "talker")}
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_a_pure_report_changes_nothing(model: str) -> None:
+    """A report the board calls pure (``Board.pure_reports``: what a board at rest may answer
+    again from what it said) changes nothing but the time and what was said: the board's
+    whole state is the same after it (a servo loop's too), and a second one says the same.
+    (One refused in a state, a command error, says no reply: none is kept.)"""
+    for setup in PURE_SETUPS:
+        board = Board(get_model(model), world=WORLD)
+        board.receive(setup.encode(), 0.0)
+        board.advance(0.05)
+        board.inject_slip(board.model.axes[0], 40.0, 0.06)
+        board.advance(0.071)  # the reports come at 0.071: what is due by then has happened
+        board.take_output()
+        for word, command in sorted(board.interpreter.words.reports.items()):
+            if command.mnemonic not in board.pure_reports:
+                continue
+            before = _lasting(board)
+            board.receive(word, 0.071)  # (a servo loop it ran would be run to 0.071: a change)
+            said = board.take_output()
+            if [type(item).__name__ for item in said] != ["Reply"]:
+                board.receive(b"\x19", 0.071)  # refused here (a command error): not kept
+                board.take_output()
+                continue
+            after = _lasting(board)
+            assert after == before, (setup, word)
+            board.receive(word, 0.071)
+            assert board.take_output() == said, (setup, word)
 
 
 # -- a trajectory's extent ------------------------------------------------------------------------

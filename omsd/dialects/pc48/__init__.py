@@ -16,7 +16,7 @@ from omsd.dialects.interpreter import Interpreter
 from omsd.dialects.pc48.commands import PC48_HANDLERS, PC48_OPS
 from omsd.dialects.pc48.ranges import PC48_RANGES
 from omsd.dialects.registry import AnyHandler, Dialect, register
-from omsd.dialects.shared import HANDLERS, REPORTS
+from omsd.dialects.shared import HANDLERS, PURE_REPORTS, REPORTS
 from omsd.engine.extensions import Framing, Options
 from omsd.engine.states import Motion
 from omsd.models.spec import CommandSpec, Model
@@ -53,6 +53,7 @@ DIALECT = register(
         framing=FRAMING,
         framing_name="surround",
         reports=REPORTS | {"AU", "AV", "AR", "AS"},
+        pure_reports=PURE_REPORTS,
         interpreter=Interpreter,
         options=OPTIONS,
         ops=PC48_OPS,

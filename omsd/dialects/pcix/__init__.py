@@ -26,7 +26,7 @@ from omsd.dialects.pcix.max_family import MAX_HANDLERS
 from omsd.dialects.pcix.motion import watch_home_switch
 from omsd.dialects.pcix.ranges import PCIX_RANGES
 from omsd.dialects.registry import AnyHandler, Dialect, register
-from omsd.dialects.shared import HANDLERS, REPORTS
+from omsd.dialects.shared import HANDLERS, PURE_REPORTS, REPORTS
 from omsd.engine.extensions import Framing, Options
 from omsd.engine.states import Motion
 from omsd.models import MODELS
@@ -85,6 +85,8 @@ DIALECT = register(
         | {"PP", "PE", "PM", "EG?"}
         | {"QL", "#WS", "PS?", "LT?", "CL?"}
         | _queries(),
+        pure_reports=PURE_REPORTS | _queries(),
+        loop_reports=frozenset({"RE", "?AB"}),
         interpreter=PcixInterpreter,
         options=OPTIONS,
         ops=PCIX_OPS,

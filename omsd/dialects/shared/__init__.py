@@ -17,6 +17,13 @@ from omsd.dialects.shared import (  # noqa: F401 (each files its handlers in HAN
     stops,
     sync,
 )
-from omsd.dialects.shared.table import HANDLERS, REPORTS, Handler, handles, registrar
+from omsd.dialects.shared.table import (
+    HANDLERS,
+    PURE_REPORTS,
+    REPORTS,
+    Handler,
+    handles,
+    registrar,
+)
 
-__all__ = ["HANDLERS", "REPORTS", "Handler", "handles", "registrar"]
+__all__ = ["HANDLERS", "PURE_REPORTS", "REPORTS", "Handler", "handles", "registrar"]

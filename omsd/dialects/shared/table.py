@@ -54,3 +54,9 @@ REPORTS = frozenset(
         *("AX", "AY", "AZ", "AT", "AM"),
     }
 )
+
+#: The reports among them that change nothing (no flag reset, no axis selected): run twice,
+#: they say the same, so a board at rest may answer them again from what it said
+#: (``Board._reports_at_rest``; each is checked on every model by
+#: ``tests/board/test_fast_paths.py::test_a_pure_report_changes_nothing``).
+PURE_REPORTS = frozenset({"RP", "RE", "QA", "QI", "RV", "RC", "RU", "RQ", "WY", "BX", "RL"})
