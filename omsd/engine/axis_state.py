@@ -149,8 +149,8 @@ class AxisState:
         # the axis's next event, (time, kind) as omsd.engine.sensing.next_event finds it (time
         # inf: none), kept until invalidate(); None: to be found again (Axis.next_event_time)
         self.event: tuple[float, str] | None = None
-        # where the queue can take the axis, kept by omsd.engine.quiet (its key, then the reach)
-        self.quiet_memo: tuple[Any, ...] | None = None
+        # where the queue can take the axis, kept by omsd.engine.quiet (a Plan)
+        self.quiet_memo: Any = None
         self.host.deadline_stale = True
 
     def factory_parameters(self) -> None:

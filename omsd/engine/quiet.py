@@ -99,75 +99,111 @@ def _reach(axis: Axis, codes: Collection[str], skip_current: bool) -> tuple[floa
     commands can take it to (``-inf`` or ``inf`` on the side a jog heads to, or everywhere once
     a move starts from where a jog stopped); ``None`` if a command is not quiet.
 
-    Kept on the axis (``AxisState.quiet_memo``) for as long as the motion, the move set up,
-    the queue's ends and its program counter are the same (objects, compared by identity:
-    they are state): a board polled between two of its deadlines asks again and again, and
-    the queue (up to hundreds of commands) is read once a move."""
+    The queue's part is read once and kept on the axis (:class:`Plan`, ``AxisState.quiet_memo``):
+    as the axis works through the same queue, what is left is the end of the same plan, and its
+    reach is the plan's from there on, as long as the axis stands where the plan said it would
+    (a board polled between two of its deadlines asks again and again; a queue holds up to
+    hundreds of commands)."""
     traj = axis.traj
-    pending = axis.pending
+    lowest, highest = traj.extent()
     queue = axis.queue
     program = queue.program
     pc = queue.pc + (1 if skip_current else 0)
-    n = len(program)
-    first = program[pc] if pc < n else None
-    last = program[-1] if n else None
-    memo = axis.quiet_memo
-    if (
-        memo is not None
-        and memo[0] is traj
-        and memo[1] is pending
-        and memo[2] is first
-        and memo[3] is last
-        and memo[4] == n - pc
-        and memo[5] == axis.ratio
-        and memo[6] is codes
-    ):
-        reach: tuple[float, float] | None = memo[7]
-        return reach
-    reach = _scan(axis, codes, program, pc, n)
-    axis.quiet_memo = (traj, pending, first, last, n - pc, axis.ratio, codes, reach)
-    return reach
-
-
-def _scan(
-    axis: Axis, codes: Collection[str], program: list[Op], pc: int, n: int
-) -> tuple[float, float] | None:
-    traj = axis.traj
-    lowest, highest = traj.extent()
-    position = traj.final if traj.is_finite else math.nan
-    to_motor = axis.to_motor
-    trunc = math.trunc
+    left = len(program) - pc
     pending = axis.pending
-    target: float | None = None
-    if pending is not None:
-        if pending.linear is not None:
-            return None
-        steps = trunc(to_motor(pending.value))
-        target = float(steps) if pending.kind == "abs" else position + steps
-    for i in range(pc, n):
-        op = program[i]
-        code = op.code
-        if code not in codes or op.group is not None:
-            return None
-        if code in MOVE_BY:  # Executor.start_pending's arithmetic
-            target = position + trunc(to_motor(op.args[0]))
-        elif code in MOVE_TO:
-            target = float(trunc(to_motor(op.args[0])))
-        elif code == "GO":
-            if target is not None:
-                position = target
-                if math.isnan(position):  # a move by so much from where a jog stopped
-                    lowest, highest = -math.inf, math.inf
-                elif position < lowest:
-                    lowest = position
-                elif position > highest:
-                    highest = position
-                target = None
-        elif code in JOGS:
-            v = op.args[0]
-            if v > 0:
-                highest = math.inf
-            elif v < 0:
-                lowest = -math.inf
-            position = math.nan  # where a jog stops is not known before it does
-    return lowest, highest
+    if left <= 0 and pending is None:
+        return lowest, highest
+    start = traj.final if traj.is_finite else math.nan
+    plan = axis.quiet_memo
+    if (
+        pending is None
+        and left > 0
+        and plan is not None
+        and plan.codes is codes
+        and plan.ratio == axis.ratio
+        and plan.ops[-1] is program[-1]
+        and (k := len(plan.ops) - left) >= 0
+        and plan.ops[k] is program[pc]
+        and plan.entering[k] == start  # (never so for NaN: read again)
+    ):
+        pass  # the rest of the same plan, from where it said the axis would be
+    else:
+        target: float | None = None
+        if pending is not None:
+            if pending.linear is not None:
+                return None
+            target = _target(axis, pending.kind == "abs", pending.value, start)
+        plan = Plan(axis, codes, program[pc:], start, target)
+        axis.quiet_memo = plan if pending is None else None
+        k = 0
+    if k < plan.loud:
+        return None
+    low, high = plan.low[k], plan.high[k]
+    return min(lowest, low), max(highest, high)
+
+
+class Plan:
+    """Where the queued commands ``ops`` take an axis that starts at ``start`` (counter frame;
+    NaN: unknown, where a jog stops) with the move ``target`` set up: for each command, where
+    the axis stands when it is reached (``entering``), and the lowest and highest position of
+    the moves from it to the end (``low``, ``high``); ``loud``: the index after the last
+    command that is not quiet (0: none), before which there is no reach."""
+
+    __slots__ = ("codes", "entering", "high", "loud", "low", "ops", "ratio")
+
+    def __init__(
+        self,
+        axis: Axis,
+        codes: Collection[str],
+        ops: list[Op],
+        start: float,
+        target: float | None,
+    ) -> None:
+        self.codes = codes
+        self.ratio = axis.ratio
+        self.ops = ops
+        to_motor = axis.to_motor
+        trunc = math.trunc
+        n = len(ops)
+        entering = [math.nan] * n
+        reached: list[tuple[float, float]] = [(math.inf, -math.inf)] * n  # by each command
+        loud = 0
+        position = start
+        for i, op in enumerate(ops):
+            entering[i] = position if target is None else math.nan
+            code = op.code
+            if code not in codes or op.group is not None:
+                loud = i + 1
+            elif code in MOVE_BY:  # Executor.start_pending's arithmetic
+                target = position + trunc(to_motor(op.args[0]))
+            elif code in MOVE_TO:
+                target = float(trunc(to_motor(op.args[0])))
+            elif code == "GO":
+                if target is not None:
+                    position = target
+                    target = None
+                    if math.isnan(position):  # a move by so much from where a jog stopped
+                        reached[i] = (-math.inf, math.inf)
+                    else:
+                        reached[i] = (position, position)
+            elif code in JOGS:
+                v = op.args[0]
+                reached[i] = (-math.inf if v < 0 else math.inf, math.inf if v > 0 else -math.inf)
+                position = math.nan  # where a jog stops is not known before it does
+        self.entering = entering
+        self.loud = loud
+        low = [math.inf] * (n + 1)
+        high = [-math.inf] * (n + 1)
+        for i in range(n - 1, -1, -1):
+            a, b = reached[i]
+            low[i] = a if a < low[i + 1] else low[i + 1]
+            high[i] = b if b > high[i + 1] else high[i + 1]
+        self.low = low
+        self.high = high
+
+
+def _target(axis: Axis, absolute: bool, value: float, position: float) -> float:
+    """Where a GO takes the axis (``Executor.start_pending``'s arithmetic); NaN for a move by
+    so much from where a jog stopped."""
+    steps = math.trunc(axis.to_motor(value))
+    return float(steps) if absolute else position + steps

@@ -376,3 +376,21 @@ def test_through_a_link_what_is_delivered_and_when_is_the_same(
         assert [s.held for s in sides[1:]] == [sides[0].held]
 
     streams()
+
+
+def test_a_queue_read_once_is_read_again_when_the_axis_is_moved_from_outside() -> None:
+    """What the queue's moves reach is read once (``quiet.Plan``) and followed as the axis works
+    through it, but only while the axis stands where the plan says: an encoder driven from
+    outside in tracking mode puts the axis elsewhere, the same relative moves now reach X's
+    switch at 2500, and the limit must be heard on time."""
+    pair = Pair("PC48-4E")
+    for _, board in pair.boards():
+        board.receive(b"AX;ET;VL5000;AC50000;" + b"MR300;GO;" * 4, 0.0, 1)
+    pair.run_until(0.2)  # the first move over (0.155 s), the second under way
+    assert pair.lazy.next_wakeup() is None  # quiet: 1200 at most
+    # tracking: the axis takes the encoder's count at once (and its queue the next move)
+    pair.both(0.2, "set_encoder_input", "X", 2100, 0.2)
+    assert pair.lazy.axes[0].traj.final == 2400  # this move stays clear of the switch...
+    pair.run_until(5.0)  # ...the next one does not
+    pair.both(5.0, "advance", 5.0)
+    assert any(type(item).__name__ == "LimitEvent" for item, _ in pair.heard["lazy"])
