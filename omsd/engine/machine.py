@@ -32,6 +32,7 @@ from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
 
 MAX_EVENTS_PER_ADVANCE = 1_000_000
+_IDLE = Motion.IDLE  # (a global: an Enum member read through its class costs more)
 INF = float("inf")
 
 #: How far before its next deadline a machine counts as at rest (:meth:`Machine.at_rest`): a
@@ -243,10 +244,23 @@ class Machine(Core):
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:
-                # fast path: an axis with no wait and nothing left in its queue is not stepped
-                # (Executor.step would return False at once, changing nothing)
-                if skip_idle and axis.wait is None and axis.queue.pc >= len(axis.queue.program):
-                    continue
+                # fast path: an axis with no wait and nothing left in its queue, or waiting for
+                # its own motion to end while it still moves (and its mover is the waiting
+                # command's sender, as Executor.step would make it), is not stepped:
+                # Executor.step would return False at once, changing nothing
+                if skip_idle:
+                    wait = axis.wait
+                    q = axis.queue
+                    if wait is None:
+                        if q.pc >= len(q.program):
+                            continue
+                    elif (
+                        wait.kind == "motion"
+                        and axis.motion is not _IDLE
+                        and q.pc < len(q.program)
+                        and q.program[q.pc].source == axis.source
+                    ):
+                        continue
                 if step(axis, t):
                     progressed = True
             if front.pump(t):

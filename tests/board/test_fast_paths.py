@@ -266,6 +266,22 @@ def test_a_reply_at_rest_is_kept_and_given_again() -> None:
         entry[b"RP"] = original
 
 
+def test_an_axis_waiting_for_its_motion_is_stepped_when_its_mover_is_not_the_sender() -> None:
+    """``Machine.settle`` does not step an axis waiting for its own motion while it moves,
+    unless its mover is not the waiting command's sender: the reference's step makes the
+    sender the mover again (whose session hears of the motion's end). No command does that
+    today (a begin() by another session's talker while the wait holds); the mover is set by
+    hand on both boards here, as such a begin would set it."""
+    twin = Twin(get_model("PC48-4"))
+    twin.receive(b"AX;VL1000;AC10000;MR5000;GO;ID;", 0.0, 1)
+    twin.advance(0.5)
+    for board in (twin.fast, twin.reference):
+        assert board.axes[0].wait is not None and board.axes[0].wait.kind == "motion"
+        board.axes[0].source = 7
+    twin.settle(0.5)
+    assert twin.fast.axes[0].source == 1
+
+
 def test_no_reply_is_kept_while_an_axis_moves_with_no_deadline() -> None:
     """A jog with the switches off has no deadline at all: the board is at rest in
     ``at_rest``'s sense while the position runs on, so no reply of it may be kept."""
