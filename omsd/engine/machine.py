@@ -128,7 +128,9 @@ class Machine(Core):
         outside. Deadlines before it may be left until the board is next run anyway (a command,
         a change of the world, a later wake-up): the board then lets them happen at their own
         times, with the same result. Without the fast paths, :meth:`next_deadline`."""
-        if not self.fast_paths:
+        if not self.fast_paths or not self.settled:
+            # (not settled: something changed that no settle has seen yet, e.g. a rewiring of
+            # the world; the next deadline may be where it shows)
             return self.next_deadline()
         deadline = self._next_internal()
         if self.wakeup_stale:
@@ -340,6 +342,7 @@ class Machine(Core):
         """Wire an axis's open-collector auxiliary output to a general-purpose input."""
         self.settled = False  # a wait for the input may be over: the next settle sees
         self.rest_epoch += 1
+        self.wakeup_stale = True
         if axis is None:
             self.world.aux_wiring.pop(bit, None)
         else:

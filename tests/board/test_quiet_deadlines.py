@@ -50,6 +50,8 @@ QUIET = [
     "AT;MR100;GO;ID;",
     "AA;MR100,100;GO;",
     "AZ;VL200;MR2000;GO;",
+    "AZ;AF;",  # an aux output low (wired to an input by a world change, it holds it low)
+    "AY;SW0;ID;",  # a wait for that input
 ]
 STEPS = STATEMENTS + QUIET
 SOURCE = st.sampled_from([1, 1, 1, 2, 0])
@@ -394,3 +396,24 @@ def test_a_queue_read_once_is_read_again_when_the_axis_is_moved_from_outside() -
     pair.run_until(5.0)  # ...the next one does not
     pair.both(5.0, "advance", 5.0)
     assert any(type(item).__name__ == "LimitEvent" for item, _ in pair.heard["lazy"])
+
+
+def test_a_rewiring_of_the_world_makes_the_board_heard_again() -> None:
+    """Found in review: an input released by unwiring an aux output lets a wait for it end at
+    the board's next settle, here at a quiet deadline of another axis; the done after it must
+    come then, not when the board is next run for another reason (T's wait, 2 s later)."""
+    pair = Pair("PC48-4")
+    steps = [b"AZ AF;", None, b"AY SW0 ID;", b"AX VL4000 AC40000 MR300 GO MR-300 GO MR300 GO;"]
+    for data in [*steps, b"AT WT2000 ID;"]:
+        if data is None:
+            for _, board in pair.boards():
+                board.wire_input_to_aux(0, "Z")  # input 0 held low by Z's aux output
+        else:
+            pair.both(0.0, "receive", data, 0.0, 1)
+    pair.run_until(0.05)
+    for _, board in pair.boards():
+        board.wire_input_to_aux(0, None)  # released: Y's SW0 may end at the next settle
+    pair.run_until(5.0)
+    pair.both(5.0, "advance", 5.0)
+    dones = [item for item, _ in pair.heard["lazy"] if type(item).__name__ == "DoneEvent"]
+    assert len(dones) == 2 and dones[0].time < 0.2
