@@ -85,6 +85,11 @@ IO_TIMEOUT = 10.0
 REPORT_LINES = 200
 """Lines of a daemon's standard error shown in the report of a failed test."""
 
+VIEW_SETTLE = 0.05
+"""Seconds a daemon's standard error must have been quiet before a failed test's report takes
+its tail: a serving daemon writes its view's lines in batches, up to 10 ms after the bytes they
+show (``omsd.telemetry.traffic.VIEW_BATCH``)."""
+
 _SUN_PATH_MAX = 100  # bytes; sockaddr_un.sun_path is 108 with its NUL, keep a margin
 _ENV_DROP = ("NOTIFY_SOCKET", "JOURNAL_STREAM", "WATCHDOG_USEC", "WATCHDOG_PID", "LISTEN_FDS")
 _OPTIONS = ("boards", "tcp", "pty", "link", "state", "timeout")
@@ -288,6 +293,19 @@ class _Drain(threading.Thread):
                 self.eof = True
                 self.changed.notify_all()
 
+    def wait_quiet(self, quiet: float, deadline: float) -> None:
+        """Until no line has come for ``quiet`` seconds (or EOF, or ``deadline``)."""
+        with self.changed:
+            seen = len(self.lines)
+            while not self.eof:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return
+                self.changed.wait(min(left, quiet))
+                if len(self.lines) == seen:
+                    return
+                seen = len(self.lines)
+
     def wait_lines(self, n: int, deadline: float, alive: Callable[[], bool]) -> list[str]:
         with self.changed:
             while len(self.lines) < n and not self.eof and alive():
@@ -413,8 +431,18 @@ class Omsd:
 
     @property
     def stderr(self) -> str:
-        """What the daemon wrote on standard error so far: its log and the traffic."""
+        """What the daemon wrote on standard error so far: its log and the traffic (whose
+        lines a serving daemon writes in batches, up to 10 ms after the bytes:
+        :meth:`settled_stderr`)."""
         return "".join(self._err.lines)
+
+    def settled_stderr(self, limit: float = 1.0) -> str:
+        """:attr:`stderr` once the daemon has written what it had to say: nothing new for
+        :data:`VIEW_SETTLE` (it writes its view's lines in batches, up to 10 ms after what
+        they show), or at most ``limit`` seconds."""
+        if self.running():
+            self._err.wait_quiet(VIEW_SETTLE, time.monotonic() + limit)
+        return self.stderr
 
     def running(self) -> bool:
         return self.process.poll() is None
@@ -681,7 +709,7 @@ class OmsdBoards:
         """The tail of every daemon's standard error, for a failed test's report."""
         parts = []
         for i, daemon in enumerate(self.daemons, 1):
-            tail = daemon.stderr.splitlines()[-REPORT_LINES:]
+            tail = daemon.settled_stderr().splitlines()[-REPORT_LINES:]
             head = f"-- omsd {i} (pid {daemon.pid}, {daemon.config}) --"
             parts.append("\n".join([head, *tail]))
         return "\n".join(parts)
