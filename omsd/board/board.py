@@ -89,8 +89,7 @@ class Board(Machine):
         """Power-up and a restore: the saved defaults (``flash_defaults``) over the factory
         values, and the stored programs, as the dialect keeps them (the PCIx; the older boards
         keep nothing in flash). Returns the saved values skipped because they do not fit."""
-        self.settled = False
-        self.rest_epoch += 1
+        self.unsettle()
         return self.interpreter.load_flash()
 
     # -- the data port ------------------------------------------------------------------------
@@ -107,8 +106,7 @@ class Board(Machine):
         be told apart (Control-D, which empties the buffer, is taken at once)."""
         if self.fast_paths and source == self.input_source and self._reports_at_rest(data, now):
             return len(data)
-        self.settled = False
-        self.rest_epoch += 1
+        self.unsettle()
         self.advance(now)
         interp = self.interpreter
         buffer = interp.buffer

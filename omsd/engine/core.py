@@ -62,9 +62,9 @@ class Core:
         # time has passed since (Machine.settle sets it; see Machine.at_rest for who clears it)
         self.settled = False
         # how many times the machine may have changed otherwise than by time passing: bumped
-        # wherever ``settled`` is cleared, by every settle, a register read or write and a
-        # report that changes something (Board._reports_at_rest); the replies a board at rest
-        # keeps are good for one count (Board._replies)
+        # by unsettle() (so wherever ``settled`` is cleared, every settle among them), a
+        # register read or write and a report that changes something (Board._reports_at_rest);
+        # the replies a board at rest keeps are good for one count (Board._replies)
         self.rest_epoch = 0
         self.options = options
         self.framing = framing
@@ -141,6 +141,14 @@ class Core:
             self.flash_macros = macros
         if self.flash_writer is not None:
             self.flash_writer(self.flash_defaults, dict(self.flash_macros))
+
+    def unsettle(self) -> None:
+        """Something may have changed that no settle has seen yet: the machine is no longer
+        at rest (``settled``), what a report said may no longer hold (``rest_epoch``), nor
+        when the board must next be run (``wakeup_stale``)."""
+        self.settled = False
+        self.rest_epoch += 1
+        self.wakeup_stale = True
 
     # -- output -------------------------------------------------------------------------------
 

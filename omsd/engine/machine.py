@@ -85,8 +85,7 @@ class Machine(Core):
         self.registers.status = 0
         self.init_until = None
         self.deadline_stale = True
-        self.settled = False
-        self.rest_epoch += 1
+        self.unsettle()
         self.front.power_up()
 
     def reset(self, t: float) -> None:
@@ -144,7 +143,6 @@ class Machine(Core):
     def _find_wakeup(self, deadline: float | None) -> float | None:
         if (
             deadline is None
-            or not self.settled
             or self.init_until is not None
             or self.executor.sensor_hooks
             or self.contour is not None
@@ -156,9 +154,8 @@ class Machine(Core):
         codes = self._quiet_codes
         best: float | None = None
         for axis in axes:
-            event = axis.event
-            t = axis.next_event_time() if event is None else event[0]
-            if t is None or t == INF or (best is not None and t >= best) or quiet(axis, codes):
+            t = axis.next_event_time()
+            if t is None or (best is not None and t >= best) or quiet(axis, codes):
                 continue
             best = t
         return best
@@ -240,9 +237,7 @@ class Machine(Core):
         step = self.executor.step
         front = self.front
         skip_idle = self.fast_paths
-        self.settled = False
-        self.rest_epoch += 1
-        self.wakeup_stale = True
+        self.unsettle()
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:
@@ -340,9 +335,7 @@ class Machine(Core):
 
     def wire_input_to_aux(self, bit: int, axis: str | None) -> None:
         """Wire an axis's open-collector auxiliary output to a general-purpose input."""
-        self.settled = False  # a wait for the input may be over: the next settle sees
-        self.rest_epoch += 1
-        self.wakeup_stale = True
+        self.unsettle()  # a wait for the input may be over: the next settle sees
         if axis is None:
             self.world.aux_wiring.pop(bit, None)
         else:

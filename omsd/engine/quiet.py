@@ -162,8 +162,6 @@ class Plan:
         self.codes = codes
         self.ratio = axis.ratio
         self.ops = ops
-        to_motor = axis.to_motor
-        trunc = math.trunc
         n = len(ops)
         entering = [math.nan] * n
         reached: list[tuple[float, float]] = [(math.inf, -math.inf)] * n  # by each command
@@ -174,10 +172,10 @@ class Plan:
             code = op.code
             if code not in codes or op.group is not None:
                 loud = i + 1
-            elif code in MOVE_BY:  # Executor.start_pending's arithmetic
-                target = position + trunc(to_motor(op.args[0]))
+            elif code in MOVE_BY:
+                target = _target(axis, False, op.args[0], position)
             elif code in MOVE_TO:
-                target = float(trunc(to_motor(op.args[0])))
+                target = _target(axis, True, op.args[0], position)
             elif code == "GO":
                 if target is not None:
                     position = target

@@ -113,8 +113,7 @@ class Link(Protocol):
 
     def next_wakeup(self) -> float | None:
         """When the board must next be run for the host to hear everything on time
-        (:meth:`omsd.engine.machine.Machine.next_wakeup`): no later than :meth:`next_deadline`
-        while the link itself holds anything for the board."""
+        (:meth:`omsd.engine.machine.Machine.next_wakeup`)."""
         ...
 
     def room(self, session: int = 0) -> int:

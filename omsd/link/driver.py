@@ -311,9 +311,9 @@ class DriverLink:
         return self.board.next_deadline()
 
     def next_wakeup(self) -> float | None:
-        if self._pending or self._waiting is not None:
-            # bytes held for the board, or a wait character: each deadline may let them on
-            return self.board.next_deadline()
+        # bytes held here mean a board whose input is full (not settled: its next wake-up is
+        # its next deadline); a wait character is released by a done or a limit, which no
+        # quiet axis gives
         return self.board.next_wakeup()
 
     def _collect(self, now: float) -> bool:

@@ -396,8 +396,7 @@ class TrafficLog:
         stream stays usable."""
         while self._queue:
             self._flush()
-        self._batch = None
-        self._show_unshown()
+        self.unbatch_view()
         self._flush_stream()
         if self._fd is not None:
             fd, self._fd = self._fd, None

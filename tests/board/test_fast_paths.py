@@ -26,10 +26,10 @@ from types import ModuleType
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from robustness import test_sessions as robust_sessions
-from robustness.conftest import long_pass
+from robustness.conftest import stream_settings
 from robustness.fuzz import ALL_MODELS, command_soup
 from twin import Twin, state
 
@@ -166,11 +166,7 @@ def test_random_streams_say_the_same_with_and_without_fast_paths(
 ) -> None:
     """60 streams a model; ``pytest --long`` (or ``OMSD_LONG=1``): 2,000."""
 
-    @settings(
-        max_examples=2000 if long_pass(request.config) else 60,
-        deadline=None,
-        suppress_health_check=[HealthCheck.too_slow],
-    )
+    @stream_settings(request.config, 60, 2000)
     @given(steps=st.lists(STEP, min_size=4, max_size=40))
     def streams(steps: list[tuple[Any, ...]]) -> None:
         play(model, steps)
@@ -211,11 +207,7 @@ def test_replies_at_rest_say_what_the_board_says(
     (``Board._reports_at_rest``) must always be what the straightforward board says. 100
     streams a model; ``--long``: 2,000."""
 
-    @settings(
-        max_examples=2000 if long_pass(request.config) else 100,
-        deadline=None,
-        suppress_health_check=[HealthCheck.too_slow],
-    )
+    @stream_settings(request.config, 100, 2000)
     @given(steps=st.lists(REST_STEP, min_size=4, max_size=40))
     def streams(steps: list[tuple[Any, ...]]) -> None:
         twin = Twin(get_model(model), world=WORLD)

@@ -22,9 +22,9 @@ import random
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
-from robustness.conftest import long_pass
+from robustness.conftest import stream_settings
 from robustness.fuzz import ALL_MODELS, command_soup
 from test_fast_paths import SEPARATORS, STATEMENTS, WORLD, report_run, world_change
 from twin import state
@@ -153,7 +153,7 @@ def play(model: str, steps: list[tuple[Any, ...]]) -> Pair:
         elif kind == "world":
             seed = step[1]
             for name, board in pair.boards():
-                world_change(_Single(board), random.Random(seed), now)
+                world_change(board, random.Random(seed), now)  # a board has what a twin has
                 pair.take(name, board, now)
             pair.both(now, "advance", now)
         elif kind == "registers":
@@ -165,28 +165,13 @@ def play(model: str, steps: list[tuple[Any, ...]]) -> Pair:
     return pair
 
 
-class _Single:
-    """What ``world_change`` needs of a twin, on one board."""
-
-    def __init__(self, board: Board) -> None:
-        self.board = board
-        self.model = board.model
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self.board, name)
-
-
 @pytest.mark.parametrize("model", ALL_MODELS)
 def test_a_board_run_at_its_wakeups_says_what_one_run_at_every_deadline_says(
     model: str, request: pytest.FixtureRequest
 ) -> None:
     """60 streams a model; ``pytest --long`` (or ``OMSD_LONG=1``): 1,500."""
 
-    @settings(
-        max_examples=1500 if long_pass(request.config) else 60,
-        deadline=None,
-        suppress_health_check=[HealthCheck.too_slow],
-    )
+    @stream_settings(request.config, 60, 1500)
     @given(steps=st.lists(STEP, min_size=4, max_size=30))
     def streams(steps: list[tuple[Any, ...]]) -> None:
         play(model, steps)
@@ -344,11 +329,7 @@ def test_through_a_link_what_is_delivered_and_when_is_the_same(
     for room: the lazy side delivers the same bytes and events at the same instants. 40 streams;
     ``--long``: 1,000."""
 
-    @settings(
-        max_examples=1000 if long_pass(request.config) else 40,
-        deadline=None,
-        suppress_health_check=[HealthCheck.too_slow],
-    )
+    @stream_settings(request.config, 40, 1000)
     @given(steps=st.lists(LINK_STEP, min_size=4, max_size=30))
     def streams(steps: list[tuple[Any, ...]]) -> None:
         sides = [LinkSide(kind, model, punctual) for punctual in (True, False)]

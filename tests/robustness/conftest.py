@@ -15,6 +15,7 @@ from typing import TypeVar
 
 import pytest
 from daemon.process import Omsd
+from hypothesis import HealthCheck, settings
 
 T = TypeVar("T")
 
@@ -27,6 +28,16 @@ def long_pass(config: pytest.Config) -> bool:
     except ValueError:  # the option is not registered (this conftest was not loaded early)
         option = False
     return flag or option
+
+
+def stream_settings(config: pytest.Config, short: int, long: int) -> settings:
+    """Hypothesis's settings for a test of random streams: ``short`` examples in the short pass,
+    ``long`` in the long one (:func:`long_pass`), no deadline, slow examples allowed."""
+    return settings(
+        max_examples=long if long_pass(config) else short,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow],
+    )
 
 
 class Scale:
