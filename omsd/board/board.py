@@ -37,6 +37,10 @@ from omsd.models.spec import Model
 from omsd.protocol.lexer import SEPARATORS, Command
 from omsd.protocol.operands import OperandError
 
+#: How many runs of reports ``Board._reports_at_rest`` keeps what it found in (a poller asks
+#: the same few again and again; a client that never repeats itself only refills it).
+SCANS_KEPT = 64
+
 CONTROL_D = 0x04
 CONTROL_Y = 0x19
 
@@ -74,6 +78,8 @@ class Board(Machine):
         if any(axis.servo is not None for axis in self.axes):
             self.pure_reports -= dialect.loop_reports
         self._replies: dict[bytes, tuple[bytes, bytes | None]] = {}
+        # what _scan found in the runs of reports polled (the words of a language are fixed)
+        self._scans: dict[bytes, list[tuple[int, Command]]] = {}
         self._replies_epoch = -1
         self.power_up(now)
 
@@ -242,7 +248,13 @@ class Board(Machine):
             if self.settled and not self.deadline_stale:
                 return True
         else:
-            found = _scan(data, words, interp.words.longest)
+            scans = self._scans
+            found = scans.get(data)
+            if found is None:
+                found = _scan(data, words, interp.words.longest)
+                if len(scans) >= SCANS_KEPT:
+                    scans.clear()
+                scans[data] = found
             if not found:
                 return False
             self.now = now

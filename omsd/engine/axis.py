@@ -14,7 +14,7 @@ import math
 from omsd.engine import profiles as pf
 from omsd.engine.axis_state import SERVO_CHECK, AxisState, steps
 from omsd.engine.gearing import moved
-from omsd.engine.sensing import next_event
+from omsd.engine.sensing import first_look_needed, next_event
 from omsd.engine.states import HomeSearch, Motion, Pending, Wait
 from omsd.engine.trajectory import Trajectory
 
@@ -50,7 +50,8 @@ class Axis(AxisState):
             self.motion = motion
             if motion is not Motion.HOLD:
                 self.in_position = False
-        self.sensor_check = t
+        if t > now or not host.plain_sensing or first_look_needed(self, t, motion):
+            self.sensor_check = t
         self.invalidate()
         moved(self, now, t, motion)
 

@@ -50,6 +50,10 @@ class Core:
         # Board.receive) are on; False runs the straightforward code everywhere (the
         # differential tests, tests/board/test_fast_paths.py, compare the two)
         self.fast_paths = fast_paths
+        # a motion's first-tick look at the sensors may be left out where it cannot find
+        # anything (omsd.engine.sensing.first_look_needed); Machine turns it off for a dialect
+        # with sensor hooks of its own
+        self.plain_sensing = fast_paths
         # the machine's next deadline, cached (Machine._next_internal): stale whenever an axis
         # drops its own cached next event (AxisState.invalidate) or init_until changes
         self.deadline_stale = True

@@ -63,6 +63,8 @@ class Machine(Core):
     ) -> None:
         super().__init__(model, now, world, framing, options or Options(), fast_paths)
         self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
+        if sensor_hooks:
+            self.plain_sensing = False  # (the PCIx: its hook looks at the home switch each time)
         # the quiet commands (omsd.engine.quiet) that run the engine's own code on this board
         own = ops or {}
         self._quiet_codes = frozenset(

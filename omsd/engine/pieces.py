@@ -55,15 +55,16 @@ class Poly:
 
     def turning_points(self) -> list[float]:
         a, b, c = self.j / 2.0, self.a0, self.v0
-        roots: list[float] = []
-        if a == 0.0:
-            if b != 0.0:
-                roots.append(-c / b)
-        else:
-            disc = b * b - 4 * a * c
-            if disc >= 0.0:
-                s = math.sqrt(disc)
-                roots.extend(((-b - s) / (2 * a), (-b + s) / (2 * a)))
+        if a == 0.0:  # a linear ramp or a cruise (most pieces): at most one root
+            if b == 0.0:
+                return []
+            root = -c / b
+            return [root] if 0.0 < root < self.duration else []
+        disc = b * b - 4 * a * c
+        if disc < 0.0:
+            return []
+        s = math.sqrt(disc)
+        roots = ((-b - s) / (2 * a), (-b + s) / (2 * a))
         return sorted(r for r in roots if 0.0 < r < self.duration)
 
 

@@ -21,6 +21,7 @@ and two more a dialect may define shapes for (PCIx §5.8.3/§5.8.4, §5.12.1):
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -329,6 +330,27 @@ def _ramp_down(up: Piece) -> Piece:
 
 
 def move_pieces(
+    distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
+) -> list[Piece]:
+    """Rest-to-rest move over ``distance`` (:func:`profile_pieces`). Fast path (issue 16): a
+    move's profile depends on nothing but these five values and its pieces are immutable, so
+    the last :data:`PROFILES_KEPT` profiles are kept (a program or a client repeats the same
+    moves); ``tests/board/test_fast_paths.py`` checks kept against computed."""
+    return list(_kept_profile(distance, vmax, accel, vbase, shape))
+
+
+#: How many move profiles :func:`move_pieces` keeps.
+PROFILES_KEPT = 256
+
+
+@functools.lru_cache(maxsize=PROFILES_KEPT)
+def _kept_profile(
+    distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
+) -> tuple[Piece, ...]:
+    return tuple(profile_pieces(distance, vmax, accel, vbase, shape))
+
+
+def profile_pieces(
     distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
 ) -> list[Piece]:
     """Rest-to-rest move over ``distance`` (signed) with peak ``vmax`` and acceleration ``accel``.

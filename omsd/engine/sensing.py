@@ -13,6 +13,9 @@ import math
 from omsd.engine.axis_state import STEP_EPS, AxisState
 from omsd.engine.backlash import backlash_tick
 from omsd.engine.states import Motion
+from omsd.engine.world import LimitWiring
+
+_MATCHED = LimitWiring.MATCHED
 
 
 def next_event(axis: AxisState) -> tuple[float, str]:
@@ -37,6 +40,36 @@ def next_event(axis: AxisState) -> tuple[float, str]:
         if when is not None and when < best[0]:
             best = (when, what)
     return best
+
+
+def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
+    """Fast path (issue 16): whether the look at the sensors on the first tick ``t`` of new
+    motion (``Axis.begin``) can find anything, for motion begun on the tick it is asked for
+    (``t`` is the machine's now: a move queued behind another begins on the tick that one
+    ends). It cannot on a plain move or jog (no home search, backlash, slip detection,
+    position hold, travel limits or stall) whose carriage is strictly between its two limit
+    switches, wired as the board's limit level expects, neither forced from outside: no limit
+    is active at ``t``, and a switch reached later is found by the search for crossings
+    (:func:`_next_crossing`) on the tick it is reached. Left out there, the look's deadline,
+    which would fall due at once (in the same ``Machine.advance``), and the settle after it are
+    saved: a queued move costs one event, its end. ``tests/board/test_fast_paths.py`` runs it
+    against the board that looks every time."""
+    if (motion is not Motion.MOVE and motion is not Motion.JOG) or (
+        axis.backlash
+        or axis.home is not None
+        or axis.slip_detect
+        or axis.hold
+        or axis.travel_limits is not None
+        or axis.stall_phys is not None
+    ):
+        return True
+    if not axis.limits_on:
+        return False
+    w = axis.world
+    if w.limit_switches is not _MATCHED or axis.index in axis.host.world.forced_limits:
+        return True
+    p = axis.carriage(t)
+    return not (w.negative_limit < p < w.positive_limit)
 
 
 def _levels(axis: AxisState, t: float) -> list[tuple[float, bool]]:

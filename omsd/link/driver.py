@@ -319,21 +319,20 @@ class DriverLink:
     def _collect(self, now: float) -> bool:
         """The board's output to the pieces and events; True if the board was asked something
         (an event's registers were read), so that it may have said more."""
-        board = self.board
-        out, sources = board.take_output_sourced()
-        if len(out) <= 1:
-            # the fast path: nothing, or one framed reply (a query's answer): its text and the
-            # end character
-            if not out:
-                return False
-            item = out[0]
-            if isinstance(item, Reply) and item.text is not None:
-                source = sources[0]
-                if source in self._echoing:
-                    self._end_echo(source)
-                merge(self._pieces, source, item.text + self.eos)
-                return False
-        return self.collect_all(out, sources, now)
+        out, sources = self.board.take_output_sourced()
+        if not out:
+            return False
+        # the fast path: nothing but framed replies (a poll's answers): each its text and the
+        # end character, as collect_all gives them (with no event, there is nothing to reorder)
+        for item in out:
+            if not isinstance(item, Reply) or item.text is None:
+                return self.collect_all(out, sources, now)
+        pieces, eos, echoing = self._pieces, self.eos, self._echoing
+        for item, source in zip(out, sources, strict=True):
+            if source in echoing:
+                self._end_echo(source)
+            merge(pieces, source, item.text + eos)  # type: ignore[operator]
+        return False
 
     def collect_all(self, out: list[Output], sources: list[int], now: float) -> bool:
         """The board's output to the pieces and events, item by item (what :meth:`_collect`

@@ -447,8 +447,24 @@ class TrafficLog:
 
     def _show_entries(self, entries: list[_Entry]) -> None:
         view: list[str] = []
-        for entry in entries:
-            self._show(entry, view)
+        if self.view == "plain":
+            # the plain view's traffic lines (nearly all of them) formatted here, the rest by
+            # _show: the same lines, without a call and an enum hash for each
+            prefix = SD_INFO if self.journal else ""
+            show = self._show
+            into, out_of = Direction.IN.arrow, Direction.OUT.arrow
+            for entry in entries:
+                if entry[0] is _TRAFFIC:
+                    _, t, board, endpoint, direction, data = entry
+                    arrow = into if direction is _IN else out_of
+                    view.append(
+                        f"{prefix}{clock_text(t)} {board} {endpoint} {arrow} {visible(data)}\n"
+                    )
+                else:
+                    show(entry, view)
+        else:
+            for entry in entries:
+                self._show(entry, view)
         if view and self.view != "off":
             self._write_stream("".join(view))
 
@@ -567,3 +583,4 @@ _MESSAGE = "message"
 _Entry = tuple[Any, ...]
 _PREFIX = {"info": SD_INFO, "warning": SD_WARNING, "error": SD_ERR}
 _ARROWS = {direction: direction.arrow for direction in Direction}
+_IN = Direction.IN

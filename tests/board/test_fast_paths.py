@@ -35,8 +35,13 @@ from twin import Twin, state
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
+from omsd.engine import reactions
+from omsd.engine.events import LimitEvent
 from omsd.engine.pieces import Cosine, Decay, Poly, Sinusoid, cruise
+from omsd.engine.ramps import RampKind, RampShape, move_pieces, profile_pieces
+from omsd.engine.states import Motion
 from omsd.engine.trajectory import Trajectory
+from omsd.engine.world import LimitWiring
 from omsd.models import MODELS, get_model
 
 #: Statements that move the axes (and so make deadlines, waits and events), valid in both
@@ -413,6 +418,79 @@ def test_the_next_deadline_is_found_again_only_when_an_axis_changed() -> None:
     board.receive(b"AY MR10 GO ", 0.1)  # another axis starts, and ends first: found again
     again = board.next_deadline()
     assert again is not None and again < first
+
+
+@pytest.mark.parametrize(
+    "world",
+    [
+        AxisWorld(limit_switches=LimitWiring.NORMALLY_CLOSED),  # a limit everywhere
+        AxisWorld(positive_limit=0.0),  # resting on the switch
+    ],
+    ids=["normally-closed", "on-the-switch"],
+)
+def test_a_move_begun_where_a_limit_is_active_stops_at_its_first_tick(world: AxisWorld) -> None:
+    """The first-tick look at the sensors is left out only where it cannot find anything
+    (``omsd.engine.sensing.first_look_needed``): a move begun on the tick of its command with
+    a limit active where it begins stops there, on both boards."""
+    twin = Twin(get_model("PC48-4"), world={"X": world})
+    twin.receive(b"AX;VL1000;AC10000;MR100;GO;", 0.0, 1)
+    twin.advance(1.0)
+    assert twin.fast.axes[0].position(1.0) == 0 and twin.fast.axes[0].motion is Motion.IDLE
+    assert any(isinstance(item, LimitEvent) for item in twin.take_output())
+
+
+def test_a_queued_move_begun_with_a_limit_forced_on_stops_at_its_first_tick() -> None:
+    """A move queued behind another begins on the tick the first ends; a limit forced on from
+    outside meanwhile (away from the switches) is found by the look on that tick."""
+    twin = Twin(get_model("PC48-4"))
+    twin.receive(b"AX;VL1000;AC10000;MR-100;GO;MR100;GO;", 0.0, 1)
+    end = twin.next_deadline()
+    assert end is not None
+    twin.set_limit("X", 1, True, end / 2)  # the first move runs the other way: no limit
+    twin.advance(end)
+    twin.advance(end + 1.0)
+    assert twin.fast.axes[0].position(end + 1.0) == -100  # the second move never went
+
+
+def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The look is really left out (a change that stopped leaving it out would pass the rest):
+    a move queued behind another, clear of the switches, begins with no look at its first
+    tick; the reference looks."""
+    looks: list[bool] = []
+    on_sensor = reactions.on_sensor
+
+    def counted(ex: Any, axis: Any, t: float) -> None:
+        looks.append(ex.machine.fast_paths)
+        on_sensor(ex, axis, t)
+
+    monkeypatch.setattr(reactions, "on_sensor", counted)
+    for fast in (True, False):
+        board = Board(get_model("PC48-4"), fast_paths=fast)
+        board.receive(b"AX;VL1000;AC10000;MR100;GO;MR-100;GO;", 0.0)
+        end = board.next_deadline()
+        assert end is not None
+        board.advance(end)
+        assert board.axes[0].motion is Motion.MOVE and board.axes[0].traj.t0 == end
+    assert looks.count(True) == 0 and looks.count(False) == 2
+
+
+def test_a_kept_move_profile_is_the_computed_one() -> None:
+    """``move_pieces`` keeps the last profiles (``omsd.engine.ramps.PROFILES_KEPT``): asked
+    again, the same pieces as computed afresh, in a new list (a caller may extend it)."""
+    shapes = [RampShape(), RampShape(RampKind.PARABOLIC, 5), RampShape(RampKind.COSINE)]
+    asked = [
+        (d, v, a, b, shape)
+        for d in (3000.0, -3000.0, 7.0, 0.0)
+        for v, a, b in ((5000.0, 50000.0, 0.0), (100.0, 1000.0, 50.0))
+        for shape in shapes
+    ]
+    for args in asked * 2:
+        got = move_pieces(*args)
+        assert got == profile_pieces(*args)
+        got.append(cruise(0.0))
+        assert move_pieces(*args) == profile_pieces(*args)
 
 
 # -- what the receive fast path rests on --------------------------------------------------------
