@@ -34,6 +34,7 @@ class Axis(AxisState):
             return
         host = self.host
         self.source = host.talker
+        from_rest = self.motion is Motion.IDLE
         now = min(host.now, t)
         self.servo_sync(now)
         prefix = pf.segment(self.traj, now, t) if t > now else []
@@ -50,7 +51,11 @@ class Axis(AxisState):
             self.motion = motion
             if motion is not Motion.HOLD:
                 self.in_position = False
-        if t > now or not host.plain_sensing or first_look_needed(self, t, motion):
+        if (
+            t > now
+            or not (from_rest and host.after_events and host.plain_sensing)
+            or first_look_needed(self, t, motion)
+        ):
             self.sensor_check = t
         self.invalidate()
         moved(self, now, t, motion)

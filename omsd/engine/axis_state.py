@@ -79,6 +79,10 @@ class Host(Protocol):
     #: fast paths off, or with a dialect's own sensor hooks (which look at every check)
     plain_sensing: bool
 
+    #: ``Machine.advance`` is running the settle after the events of one instant (whatever is
+    #: due at that instant then happens before the advance returns)
+    after_events: bool
+
 
 class AxisState:
     def __init__(self, host: Host, index: int, letter: str, world: AxisWorld) -> None:

@@ -54,6 +54,8 @@ class Core:
         # anything (omsd.engine.sensing.first_look_needed); Machine turns it off for a dialect
         # with sensor hooks of its own
         self.plain_sensing = fast_paths
+        # Machine.advance is running the settle after the events of one instant
+        self.after_events = False
         # the machine's next deadline, cached (Machine._next_internal): stale whenever an axis
         # drops its own cached next event (AxisState.invalidate) or init_until changes
         self.deadline_stale = True

@@ -262,7 +262,9 @@ class Executor:
                 continue
             target = targets[axis.index]
             distance = target - axis.position(tick)
-            pieces = pf.move_pieces(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
+            # (the kept profiles are a fast path: the straightforward board computes each)
+            profile = pf.move_pieces if machine.fast_paths else pf.profile_pieces
+            pieces = profile(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
             if distance:
                 axis.direction = 1 if distance > 0 else -1
             if axis.index in saved and restore:

@@ -112,7 +112,11 @@ class Machine(Core):
                 break
             self.now = max(self.now, t)
             self._handle_due(t)
-            self.settle(t)
+            self.after_events = True  # (a move begun now is looked at in this same loop)
+            try:
+                self.settle(t)
+            finally:
+                self.after_events = False
         self.now = now
 
     def next_deadline(self) -> float | None:

@@ -43,18 +43,20 @@ def next_event(axis: AxisState) -> tuple[float, str]:
 
 
 def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
-    """Fast path (issue 16): whether the look at the sensors on the first tick ``t`` of new
-    motion (``Axis.begin``) can find anything, for motion begun on the tick it is asked for
-    (``t`` is the machine's now: a move queued behind another begins on the tick that one
-    ends). It cannot on a plain move or jog (no home search, backlash, slip detection,
-    position hold, travel limits or stall) whose carriage is strictly between its two limit
-    switches, wired as the board's limit level expects, neither forced from outside: no limit
-    is active at ``t``, and a switch reached later is found by the search for crossings
-    (:func:`_next_crossing`) on the tick it is reached. Left out there, the look's deadline,
-    which would fall due at once (in the same ``Machine.advance``), and the settle after it are
+    """Fast path (issue 16): whether the look at the sensors on the first tick ``t`` of a move
+    can find anything. ``Axis.begin`` asks only for a move begun from rest on the instant
+    ``Machine.advance`` is settling (``t`` is now: a move queued behind another, begun on the
+    tick that one ends), whose look the reference would take in that same advance, right after
+    the settle; the move's ``GO`` holds the queue until it ends, and the axis stands on a whole
+    step, so nothing on that instant can move its carriage before the look. The look cannot
+    find anything for a plain move (no home search, backlash, slip detection, position hold,
+    travel limits or stall) whose carriage is strictly between its two limit switches, wired as
+    the board's limit level expects, neither forced from outside: no limit is active at ``t``,
+    and a switch reached later is found by the search for crossings (:func:`_next_crossing`)
+    on the tick it is reached. Left out there, the look's event and the settle after it are
     saved: a queued move costs one event, its end. ``tests/board/test_fast_paths.py`` runs it
     against the board that looks every time."""
-    if (motion is not Motion.MOVE and motion is not Motion.JOG) or (
+    if motion is not Motion.MOVE or (
         axis.backlash
         or axis.home is not None
         or axis.slip_detect

@@ -324,14 +324,16 @@ class DriverLink:
             return False
         # the fast path: nothing but framed replies (a poll's answers): each its text and the
         # end character, as collect_all gives them (with no event, there is nothing to reorder)
+        texts: list[bytes] = []
         for item in out:
             if not isinstance(item, Reply) or item.text is None:
                 return self.collect_all(out, sources, now)
+            texts.append(item.text)
         pieces, eos, echoing = self._pieces, self.eos, self._echoing
-        for item, source in zip(out, sources, strict=True):
+        for text, source in zip(texts, sources, strict=True):
             if source in echoing:
                 self._end_echo(source)
-            merge(pieces, source, item.text + eos)  # type: ignore[operator]
+            merge(pieces, source, text + eos)
         return False
 
     def collect_all(self, out: list[Output], sources: list[int], now: float) -> bool:

@@ -452,12 +452,60 @@ def test_a_queued_move_begun_with_a_limit_forced_on_stops_at_its_first_tick() ->
     assert twin.fast.axes[0].position(end + 1.0) == -100  # the second move never went
 
 
+def test_a_queued_move_begun_on_a_switch_stops_at_its_first_tick() -> None:
+    """A move queued behind another begins where that one ended; a slip meanwhile put the
+    carriage on the positive switch (the first move ran away from it, so no limit then): the
+    look on the second move's first tick finds the limit."""
+    twin = Twin(get_model("PC48-4"), world={"X": AxisWorld(positive_limit=30.0)})
+    twin.receive(b"AX;VL1000;AC10000;MR-100;GO;MR100;GO;", 0.0, 1)
+    end = twin.next_deadline()
+    assert end is not None
+    twin.inject_slip("X", 200.0, end / 2)
+    twin.advance(end)
+    twin.advance(end + 1.0)
+    assert twin.fast.axes[0].position(end + 1.0) == -100  # the second move never went
+    assert any(isinstance(item, LimitEvent) for item in twin.take_output())
+
+
+@pytest.mark.parametrize("model", ["PC48-4", "PC46-21", "VS4-040"])
+def test_a_jog_restarted_at_its_speed_and_a_position_loaded_on_its_tick_are_looked_at(
+    model: str,
+) -> None:
+    """Found in review: a jog given again at its own speed begins on the tick of its command
+    with its queue running on, and an ``LP`` on that tick moves the carriage's frame by the
+    position's fraction of a step, onto a switch 0.05 steps away: the look on that tick finds
+    the limit (the look is left out only for a move begun from rest)."""
+    twin = Twin(get_model(model), world={"X": AxisWorld(positive_limit=50.05)})
+    twin.receive(b"AX;AC10000;JG1000;JG1000;LP0;", 0.0, 1)
+    twin.advance(1.0)
+    assert any(isinstance(item, LimitEvent) for item in twin.take_output())
+
+
+def test_a_move_begun_by_a_settle_outside_an_advance_is_looked_at() -> None:
+    """Found in review: a queued move begun by the settle of a change of the world
+    (``set_input`` ends a ``SW``) has its look pending when the call returns, as the reference
+    has: the next deadline is that instant, and a settle there ends another axis's wait for an
+    input released meanwhile without a settle (``wire_input_to_aux``)."""
+    twin = Twin(get_model("PC48-4"))
+    twin.set_input(0, False, 0.0)
+    twin.receive(b"AZ;AF;", 0.0, 1)  # Z's aux output low, holding input 1 low
+    twin.wire_input_to_aux(1, "Z")
+    twin.receive(b"AY;SW1;MR100;GO;AX;SW0;MR100;GO;", 0.0, 1)
+    twin.set_input(0, True, 0.5)  # 0.5 is a sample tick: X's move begins at once
+    assert twin.next_deadline() == 0.5
+    twin.wire_input_to_aux(1, None)
+    twin.take_output()
+    twin.receive(b"AY;RP;", 0.515, 1)
+    assert twin.take_bytes() == b"\n\r87\n\r"
+
+
 def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The look is really left out (a change that stopped leaving it out would pass the rest):
     a move queued behind another, clear of the switches, begins with no look at its first
-    tick; the reference looks."""
+    tick; the reference looks. A move begun by its command is looked at (it is not begun in
+    the settle after an instant's events)."""
     looks: list[bool] = []
     on_sensor = reactions.on_sensor
 
@@ -473,7 +521,8 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
         assert end is not None
         board.advance(end)
         assert board.axes[0].motion is Motion.MOVE and board.axes[0].traj.t0 == end
-    assert looks.count(True) == 0 and looks.count(False) == 2
+    # the first move, begun by its command, is looked at by both; the second only by the reference
+    assert looks.count(True) == 1 and looks.count(False) == 2
 
 
 def test_a_kept_move_profile_is_the_computed_one() -> None:
