@@ -54,6 +54,7 @@ if _missing():
     pytest.skip(_REASON, allow_module_level=True)
 
 from selenium import webdriver  # noqa: E402
+from selenium.common.exceptions import StaleElementReferenceException  # noqa: E402
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.remote.webdriver import WebDriver  # noqa: E402
@@ -167,9 +168,18 @@ def clean_console(driver: WebDriver) -> Iterator[None]:
 
 
 def within(condition: Callable[[], object], timeout: float, what: str) -> float:
-    """Seconds until ``condition()`` holds; fails naming ``what`` after ``timeout``."""
+    """Seconds until ``condition()`` holds; fails naming ``what`` after ``timeout``. An element
+    the page removed between being found and being read (the traffic tail drops its oldest
+    lines as new ones come) is "not yet": the condition is asked again."""
+
+    def holds() -> bool:
+        try:
+            return bool(condition())
+        except StaleElementReferenceException:
+            return False
+
     begun = time.monotonic()
-    assert wait_for(lambda: bool(condition()), timeout), f"not within {timeout} s: {what}"
+    assert wait_for(holds, timeout), f"not within {timeout} s: {what}"
     return time.monotonic() - begun
 
 
