@@ -5,8 +5,8 @@ The fast paths, each a named place in the code:
 
 * the raw link's one reply as it is (``RawLink.to_host``, against ``RawLink.output``);
 * the driver link's bytes with nothing for the driver to do going straight to the board
-  (``DriverLink._straight_through``, against ``DriverLink.through_buffer``) and its one framed
-  reply (``DriverLink._collect``, against ``DriverLink.collect_all``);
+  (``DriverLink._straight_through``, against ``DriverLink.through_buffer``) and its framed
+  replies with no event among them (``DriverLink._collect``, against ``DriverLink.collect_all``);
 * the service's whole cable (``BoardService._clean``: ``client.send`` instead of ``_deliver``)
   and its held log (the file's lines written per turn before the replies, the view's after
   them, against a log written at once);
