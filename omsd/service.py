@@ -225,10 +225,16 @@ class BoardService:
         """``client`` shut down its sending side. True: keep it open until what it sent is
         done (at most ``linger`` seconds), then :meth:`Lingering.finish`; False: close now."""
         linger = self.config.linger
-        if linger <= 0 or not self.session_busy(client):
+        if linger <= 0:
+            return False
+        # the board run to now first: with quiet wake-ups (Machine.next_wakeup) a move may have
+        # ended since it was last run, and the session would look busy
+        self.service()
+        if not self.session_busy(client):
             return False
         timer = self.loop.call_later(linger, self._linger_over, client)
         self._lingering[client.session] = (client, timer)
+        self._reschedule()  # a board with a client lingering is woken at every deadline
         return True
 
     def _linger_over(self, client: Lingering) -> None:

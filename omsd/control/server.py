@@ -453,6 +453,10 @@ class ControlServer:
         timeout = float(m.get("timeout", DEFAULT_WAIT))
         if not 0.0 <= timeout <= MAX_WAIT:
             raise ControlError(f"timeout: expected 0 to {MAX_WAIT} s, got {timeout}")
+        # the board run to now first: the condition reads where the axis is and where its
+        # motion began, which a board woken only when its host could hear something
+        # (Machine.next_wakeup) may not have brought up to date
+        service.service()
         check = self._condition(service, m, until)
         woken = asyncio.Event()
         watcher = _Watcher(woken)

@@ -12,8 +12,11 @@ before.
 from __future__ import annotations
 
 import asyncio
+import dataclasses
+import io
 
 from omsd.config import BoardConfig, TcpEndpoint
+from omsd.control.server import ControlServer
 from omsd.daemon import Daemon
 from omsd.service import BoardService
 
@@ -106,4 +109,75 @@ async def test_an_observer_wakes_the_board_at_every_deadline() -> None:
             assert watcher.changes >= seen + 2  # each move's end, as it came
         finally:
             service.observers.remove(watcher)  # type: ignore[arg-type]
+            writer.close()
+
+
+# -- who reads the board between its wake-ups runs it first (found in review) --------------------
+
+LINGER = 60.0  # far longer than any wait below: a close that comes is the move's end, not this
+
+
+def lingering(name: str) -> BoardConfig:
+    return dataclasses.replace(board(name), linger=LINGER)
+
+
+async def closed(reader: asyncio.StreamReader) -> bool:
+    """The daemon closed the connection (EOF) within the tests' wait; False if it kept it."""
+    try:
+        return await asyncio.wait_for(reader.read(), WAIT) == b""
+    except TimeoutError:
+        return False
+
+
+async def test_a_client_that_stops_sending_after_its_quiet_moves_ended_is_closed() -> None:
+    """The moves ended while no wake-up ran the board: the half-close runs it first, finds the
+    session idle, and closes at once (it used to see the last move still running and keep the
+    client for the whole linger time)."""
+    out = io.StringIO()
+    async with serving(lingering("q3"), out=out) as daemon:
+        service = service_of(daemon, "q3")
+        reader, writer = await connect(daemon, "q3")
+        await ask(reader, writer, b"AZ VL4000 AC40000 MR300 GO MR-300 GO WY\n")
+        assert service._timer is None
+        await asyncio.sleep(0.6)  # both moves are over; nothing has run the board since
+        writer.write_eof()
+        assert await closed(reader)
+        writer.close()
+    assert "after it stopped sending" not in out.getvalue()
+
+
+async def test_a_client_that_stops_sending_during_its_quiet_moves_is_closed_when_they_end() -> None:
+    """Kept open for its answers while the moves run, the client makes the board woken at every
+    deadline: it is closed when the last move ends, not when the linger time runs out."""
+    out = io.StringIO()
+    async with serving(lingering("q4"), out=out) as daemon:
+        service = service_of(daemon, "q4")
+        reader, writer = await connect(daemon, "q4")
+        await ask(reader, writer, b"AZ VL4000 AC40000 MR300 GO MR-300 GO WY\n")
+        writer.write_eof()
+        assert await closed(reader)
+        assert not service.board.axes[2].moving
+        writer.close()
+    assert "after it stopped sending" not in out.getvalue()
+
+
+async def test_a_control_wait_for_a_position_sees_the_move_under_way() -> None:
+    """``wait until=position`` reads where the axis is and where its motion began: the board is
+    run to now first. Here the first of two queued moves ended while nothing ran the board; the
+    second, heading back down through 500, has not passed it yet, so the wait must not end at
+    once (it used to see the first move, which had passed 500)."""
+    async with serving(board("q5")) as daemon:
+        service = service_of(daemon, "q5")
+        reader, writer = await connect(daemon, "q5")
+        try:
+            # 0 to 1000 in about 1.01 s, then back to 0: at 1.3 s the axis is near 700, going down
+            await ask(reader, writer, b"AZ VL1000 AC100000 MR1000 GO MR-1000 GO WY\n")
+            assert service._timer is None
+            await asyncio.sleep(1.3)
+            control = ControlServer({"q5": service}, lambda: [], daemon.log)
+            state = await control._wait(
+                service, {"until": "position", "axis": "Z", "position": 500, "timeout": WAIT}
+            )
+            assert state["axes"]["Z"]["position"] <= 500
+        finally:
             writer.close()
