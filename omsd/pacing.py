@@ -110,6 +110,11 @@ class Pacer:
         self._timer_at: float | None = None
 
     @property
+    def idle(self) -> bool:
+        """Nothing given is waiting to be handed on."""
+        return not self._queue
+
+    @property
     def waiting(self) -> int:
         """Bytes given that have not been handed on yet."""
         return sum(len(chunk.data) - chunk.sent for chunk in self._queue)

@@ -266,11 +266,12 @@ class BoardService:
         and written in one go, just before the replies are sent (:meth:`_run`)."""
         if self._closed:
             return 0
-        if not self._clean:
+        if not self._clean or self._inbound:
             faults = self.faults
             if not faults.cable:
                 return len(data)  # into a cut cable: lost
-            if faults.damaging or faults.baud is not None:
+            if faults.damaging or faults.baud is not None or self._inbound:
+                # (bytes still on the wire from before the cable was healed go first)
                 return self._feed_faulty(client, data)
         log = self.log
         log.hold()
@@ -295,7 +296,10 @@ class BoardService:
         self.active = client
         room = MAX_IN_FLIGHT - len(self._inbound)
         if room <= 0:
-            return 0  # the wire is full: the client waits (input_room when it drains)
+            # the wire is full: the client waits, and is called (input_room) when it drains
+            if client not in self._waiting:
+                self._waiting.append(client)
+            return 0
         data = data[:room]
         self._traffic(client.label, Direction.IN, data)
         damaged = self.faults.damage(data)
@@ -399,14 +403,16 @@ class BoardService:
             self.log.write_kept()
             for client, data in sending:
                 if client is not None:
-                    if self._clean:
+                    if self._clean and self._out.idle:
                         client.send(data)  # the fast path: nothing on the cable
                     else:
                         self._deliver(client, data)
         if self._waiting:
             # never call back into a client from here: a client may be inside feed()
             room = self.link.room
-            ready = [c for c in self._waiting if room(c.session) > 0]
+            # (a client held back by a full faulty wire waits for the wire to drain too)
+            wire = len(self._inbound) < MAX_IN_FLIGHT
+            ready = [c for c in self._waiting if wire and room(c.session) > 0]
             for client in ready:
                 self._waiting.remove(client)
                 self.loop.call_soon(client.input_room)
