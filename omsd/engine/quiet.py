@@ -32,8 +32,8 @@ from collections.abc import Collection
 
 from omsd.engine.axis import Axis
 from omsd.engine.queue import Op
+from omsd.engine.sensing import looks_at_nothing_else, switches_clear
 from omsd.engine.states import Motion
-from omsd.engine.world import LimitWiring
 
 #: Queued commands after which an axis stays quiet: moves, jogs, timed waits and the parameters
 #: of moves (PC48 §6.5-§6.8, §6.10 WT). None says anything, reads an input or drives an output.
@@ -54,19 +54,13 @@ def quiet(axis: Axis, codes: Collection[str]) -> bool:
     board."""
     if axis.motion not in QUIET_MOTIONS:
         return False
-    if (
-        axis.home is not None
-        or axis.slip_detect
-        or axis.stall_phys is not None
-        or axis.hold
-        or axis.servo is not None
+    if not looks_at_nothing_else(axis) or (
+        axis.servo is not None
         or axis.pa is not None
         or axis.aux_timer is not None
         or axis.outputs
         or axis.in_arm is not None
         or axis.in_fire is not None
-        or axis.travel_limits is not None
-        or axis.backlash  # the carriage is then apart from the counter by up to that much
     ):
         return False
     wait = axis.wait
@@ -77,21 +71,9 @@ def quiet(axis: Axis, codes: Collection[str]) -> bool:
     reach = _reach(axis, codes, skip_current=wait is not None)
     if reach is None:
         return False
-    if not axis.limits_on:
-        return True
-    w = axis.world
-    if w.limit_switches is not LimitWiring.MATCHED:
-        return False  # a line that reads as a limit away from the switches too
-    world = axis.host.world
-    index = axis.index
-    if world.forced_limit(index, 1) is not None or world.forced_limit(index, -1) is not None:
-        return False
     lowest, highest = reach
     offset = axis.phys_offset
-    return (
-        lowest + offset > w.negative_limit + SWITCH_MARGIN
-        and highest + offset < w.positive_limit - SWITCH_MARGIN
-    )
+    return switches_clear(axis, lowest + offset, highest + offset, SWITCH_MARGIN)
 
 
 def _reach(axis: Axis, codes: Collection[str], skip_current: bool) -> tuple[float, float] | None:

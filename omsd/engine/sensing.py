@@ -49,29 +49,46 @@ def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
     tick that one ends), whose look the reference would take in that same advance, right after
     the settle; the move's ``GO`` holds the queue until it ends, and the axis stands on a whole
     step, so nothing on that instant can move its carriage before the look. The look cannot
-    find anything for a plain move (no home search, backlash, slip detection, position hold,
-    travel limits or stall) whose carriage is strictly between its two limit switches, wired as
-    the board's limit level expects, neither forced from outside: no limit is active at ``t``,
-    and a switch reached later is found by the search for crossings (:func:`_next_crossing`)
-    on the tick it is reached. Left out there, the look's event and the settle after it are
-    saved: a queued move costs one event, its end. ``tests/board/test_fast_paths.py`` runs it
-    against the board that looks every time."""
-    if motion is not Motion.MOVE or (
+    find anything for a plain move (:func:`looks_at_nothing_else`) whose carriage is strictly
+    between its limit switches (:func:`switches_clear`): no limit is active at ``t``, and a
+    switch reached later is found by the search for crossings (:func:`_next_crossing`) on the
+    tick it is reached. Left out there, the look's event and the settle after it are saved: a
+    queued move costs one event, its end. ``tests/board/test_fast_paths.py`` runs it against
+    the board that looks every time."""
+    if motion is not Motion.MOVE or not looks_at_nothing_else(axis):
+        return True
+    p = axis.carriage(t)
+    return not switches_clear(axis, p, p, 0.0)
+
+
+def looks_at_nothing_else(axis: AxisState) -> bool:
+    """A look at the sensors (``reactions.on_sensor``) can do nothing to the axis but find a
+    limit: no home search, backlash (with which the carriage is also apart from the counter by
+    up to that much), slip detection, position hold, travel limits or stall."""
+    return not (
         axis.backlash
         or axis.home is not None
         or axis.slip_detect
         or axis.hold
         or axis.travel_limits is not None
         or axis.stall_phys is not None
-    ):
-        return True
+    )
+
+
+def switches_clear(axis: AxisState, lowest: float, highest: float, margin: float) -> bool:
+    """No limit is active anywhere from ``lowest`` to ``highest`` (physical positions) with
+    ``margin`` steps to spare: the limits are off, or switches wired as the board's limit level
+    expects (a line that reads as a limit away from its switch is never clear), neither forced
+    from outside, lie beyond both ends."""
     if not axis.limits_on:
-        return False
-    w = axis.world
-    if w.limit_switches is not _MATCHED or axis.index in axis.host.world.forced_limits:
         return True
-    p = axis.carriage(t)
-    return not (w.negative_limit < p < w.positive_limit)
+    w = axis.world
+    if w.limit_switches is not _MATCHED:
+        return False
+    world, index = axis.host.world, axis.index
+    if world.forced_limit(index, 1) is not None or world.forced_limit(index, -1) is not None:
+        return False
+    return lowest > w.negative_limit + margin and highest < w.positive_limit - margin
 
 
 def _levels(axis: AxisState, t: float) -> list[tuple[float, bool]]:

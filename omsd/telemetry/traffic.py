@@ -112,12 +112,12 @@ if TYPE_CHECKING:
 VIEWS = ("auto", "rich", "plain", "off")
 """The accepted values of ``TrafficLog(view=...)``."""
 
-# sd-daemon(3) level prefixes.
 #: How long the view's lines may wait for more in a batch (:meth:`TrafficLog.batch_view`): too
 #: short for a reader to notice, long enough that a client's round trips do not each pay for a
 #: line formatted and a write to the stream (issue 16).
 VIEW_BATCH = 0.01
 
+# sd-daemon(3) level prefixes.
 SD_ERR = "<3>"
 SD_WARNING = "<4>"
 SD_INFO = "<6>"
@@ -447,24 +447,8 @@ class TrafficLog:
 
     def _show_entries(self, entries: list[_Entry]) -> None:
         view: list[str] = []
-        if self.view == "plain":
-            # the plain view's traffic lines (nearly all of them) formatted here, the rest by
-            # _show: the same lines, without a call and an enum hash for each
-            prefix = SD_INFO if self.journal else ""
-            show = self._show
-            into, out_of = Direction.IN.arrow, Direction.OUT.arrow
-            for entry in entries:
-                if entry[0] is _TRAFFIC:
-                    _, t, board, endpoint, direction, data = entry
-                    arrow = into if direction is _IN else out_of
-                    view.append(
-                        f"{prefix}{clock_text(t)} {board} {endpoint} {arrow} {visible(data)}\n"
-                    )
-                else:
-                    show(entry, view)
-        else:
-            for entry in entries:
-                self._show(entry, view)
+        for entry in entries:
+            self._show(entry, view)
         if view and self.view != "off":
             self._write_stream("".join(view))
 
@@ -487,10 +471,9 @@ class TrafficLog:
             prefix = SD_INFO if self.journal else ""
             if kind is _TRAFFIC:
                 _, t, board, endpoint, direction, data = entry
-                out.append(
-                    f"{prefix}{clock_text(t)} {board} {endpoint} {_ARROWS[direction]} "
-                    f"{visible(data)}\n"
-                )
+                # (the arrow found without a dict: an Enum member's hash is Python code)
+                arrow = _IN_ARROW if direction is _IN else _OUT_ARROW
+                out.append(f"{prefix}{clock_text(t)} {board} {endpoint} {arrow} {visible(data)}\n")
             elif kind is _EVENT_ENTRY:
                 _, t, board, what = entry
                 out.append(f"{prefix}{clock_text(t)} {board} [{what}]\n")
@@ -584,3 +567,4 @@ _Entry = tuple[Any, ...]
 _PREFIX = {"info": SD_INFO, "warning": SD_WARNING, "error": SD_ERR}
 _ARROWS = {direction: direction.arrow for direction in Direction}
 _IN = Direction.IN
+_IN_ARROW, _OUT_ARROW = Direction.IN.arrow, Direction.OUT.arrow

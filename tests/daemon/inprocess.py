@@ -9,8 +9,9 @@ import re
 from collections.abc import AsyncIterator
 
 from omsd import wakeups
-from omsd.config import BoardConfig, ControlConfig, DaemonConfig
+from omsd.config import BoardConfig, ControlConfig, DaemonConfig, TcpEndpoint
 from omsd.daemon import Daemon
+from omsd.service import BoardService
 from omsd.telemetry.traffic import TrafficLog
 
 WAIT = 20.0
@@ -46,3 +47,34 @@ def release_wakeups(loop: asyncio.AbstractEventLoop) -> None:
             timers._reading = False
         timers._timer.close()
         timers._timer.fd = -1  # its finalizer closes it again: not another file's number
+
+
+def tcp_board(name: str) -> BoardConfig:
+    """A PC48-4 on the driver link with a TCP endpoint on a free port."""
+    return BoardConfig(
+        name=name, model="PC48-4", link="driver", tcp=(TcpEndpoint("127.0.0.1", 0, False),)
+    )
+
+
+async def connect(daemon: Daemon, name: str) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+    """A client of board ``name``'s TCP endpoint."""
+    (endpoint,) = [e for e in daemon.endpoints if e.board == name and e.kind == "tcp"]
+    port = int(endpoint.address.rsplit(":", 1)[1])
+    return await asyncio.open_connection("127.0.0.1", port)
+
+
+def service_of(daemon: Daemon, name: str) -> BoardService:
+    (service,) = [s for s in daemon.services if s.name == name]
+    return service
+
+
+async def ask(
+    reader: asyncio.StreamReader, writer: asyncio.StreamWriter, data: bytes, lines: int = 1
+) -> bytes:
+    """Write ``data``; the next ``lines`` lines the board answers."""
+    writer.write(data)
+    await writer.drain()
+    out = b""
+    for _ in range(lines):
+        out += await asyncio.wait_for(reader.readline(), WAIT)
+    return out

@@ -9,24 +9,9 @@ import asyncio
 
 import pytest
 
-from omsd.config import BoardConfig, TcpEndpoint
 from omsd.faults import Faults
 
-from .inprocess import WAIT, serving
-from .test_quiet_wakeups import connect, service_of
-
-
-def board(name: str) -> BoardConfig:
-    return BoardConfig(
-        name=name, model="PC48-4", link="driver", tcp=(TcpEndpoint("127.0.0.1", 0, False),)
-    )
-
-
-async def read_lines(reader: asyncio.StreamReader, count: int) -> bytes:
-    out = b""
-    for _ in range(count):
-        out += await asyncio.wait_for(reader.readline(), WAIT)
-    return out
+from .inprocess import WAIT, ask, connect, service_of, serving, tcp_board
 
 
 async def test_a_client_held_back_by_a_full_wire_is_called_again_when_it_drains() -> None:
@@ -34,7 +19,7 @@ async def test_a_client_held_back_by_a_full_wire_is_called_again_when_it_drains(
     the done releases the wait, the board has room but the wire has none: the client must be
     called again once the wire drains, and every request answered."""
     polls = 30_000
-    async with serving(board("c1")) as daemon:
+    async with serving(tcp_board("c1")) as daemon:
         service = service_of(daemon, "c1")
         service.set_faults(Faults(garble=1e-15))  # "damaging", but damages nothing
         reader, writer = await connect(daemon, "c1")
@@ -61,7 +46,7 @@ async def test_a_client_held_back_by_a_full_wire_is_called_again_when_it_drains(
 async def test_what_is_on_the_cable_when_it_is_healed_keeps_its_order(
     name: str, faults: Faults
 ) -> None:
-    async with serving(board(name)) as daemon:
+    async with serving(tcp_board(name)) as daemon:
         service = service_of(daemon, name)
         reader, writer = await connect(daemon, name)
         try:
@@ -71,7 +56,6 @@ async def test_what_is_on_the_cable_when_it_is_healed_keeps_its_order(
             await asyncio.sleep(0.05)
             assert service._inbound or not service._out.idle  # something is on the cable
             service.set_faults(Faults())
-            writer.write(b"AX RP\r")
-            assert await read_lines(reader, 2) == b"PC48 ver 3.00-4\n0\n"
+            assert await ask(reader, writer, b"AX RP\r", 2) == b"PC48 ver 3.00-4\n0\n"
         finally:
             writer.close()

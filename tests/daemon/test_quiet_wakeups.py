@@ -15,44 +15,15 @@ import asyncio
 import dataclasses
 import io
 
-from omsd.config import BoardConfig, TcpEndpoint
+from omsd.config import BoardConfig
 from omsd.control.server import ControlServer
-from omsd.daemon import Daemon
 from omsd.service import BoardService
 
-from .inprocess import WAIT, serving
-
-
-def board(name: str) -> BoardConfig:
-    return BoardConfig(
-        name=name, model="PC48-4", link="driver", tcp=(TcpEndpoint("127.0.0.1", 0, False),)
-    )
-
-
-async def connect(daemon: Daemon, name: str) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
-    (endpoint,) = [e for e in daemon.endpoints if e.board == name and e.kind == "tcp"]
-    port = int(endpoint.address.rsplit(":", 1)[1])
-    return await asyncio.open_connection("127.0.0.1", port)
-
-
-def service_of(daemon: Daemon, name: str) -> BoardService:
-    (service,) = [s for s in daemon.services if s.name == name]
-    return service
-
-
-async def ask(
-    reader: asyncio.StreamReader, writer: asyncio.StreamWriter, data: bytes, lines: int = 1
-) -> bytes:
-    writer.write(data)
-    await writer.drain()
-    out = b""
-    for _ in range(lines):
-        out += await asyncio.wait_for(reader.readline(), WAIT)
-    return out
+from .inprocess import WAIT, ask, connect, service_of, serving, tcp_board
 
 
 async def test_queued_moves_arm_no_wakeup_and_a_done_after_them_does() -> None:
-    async with serving(board("q1")) as daemon:
+    async with serving(tcp_board("q1")) as daemon:
         service = service_of(daemon, "q1")
         reader, writer = await connect(daemon, "q1")
         try:
@@ -94,7 +65,7 @@ async def test_an_observer_wakes_the_board_at_every_deadline() -> None:
         def changed(self, service: BoardService) -> None:
             self.changes += 1
 
-    async with serving(board("q2")) as daemon:
+    async with serving(tcp_board("q2")) as daemon:
         service = service_of(daemon, "q2")
         watcher = Watcher()
         service.observers.append(watcher)  # type: ignore[arg-type]
@@ -118,7 +89,7 @@ LINGER = 60.0  # far longer than any wait below: a close that comes is the move'
 
 
 def lingering(name: str) -> BoardConfig:
-    return dataclasses.replace(board(name), linger=LINGER)
+    return dataclasses.replace(tcp_board(name), linger=LINGER)
 
 
 async def closed(reader: asyncio.StreamReader) -> bool:
@@ -166,7 +137,7 @@ async def test_a_control_wait_for_a_position_sees_the_move_under_way() -> None:
     run to now first. Here the first of two queued moves ended while nothing ran the board; the
     second, heading back down through 500, has not passed it yet, so the wait must not end at
     once (it used to see the first move, which had passed 500)."""
-    async with serving(board("q5")) as daemon:
+    async with serving(tcp_board("q5")) as daemon:
         service = service_of(daemon, "q5")
         reader, writer = await connect(daemon, "q5")
         try:
