@@ -38,7 +38,7 @@ class Axis(AxisState):
         now = min(host.now, t)
         self.servo_sync(now)
         prefix = pf.segment(self.traj, now, t) if t > now else []
-        moving_before = any(p.v(0.0) != 0.0 or p.a(0.0) != 0.0 for p in prefix)
+        moving_before = bool(prefix) and any(p.v(0.0) != 0.0 or p.a(0.0) != 0.0 for p in prefix)
         x_now = self.traj.position(now)
         if not pieces and not moving_before:
             x = self.traj.position(t)

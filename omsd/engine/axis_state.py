@@ -74,6 +74,9 @@ class Host(Protocol):
     #: the machine's cached next deadline is to be found again (an axis's next event changed)
     deadline_stale: bool
 
+    #: the fast paths are taken (issue 16; False only in the differential tests' reference)
+    fast_paths: bool
+
     #: fast path (issue 16): a motion's first-tick look at the sensors may be left out where it
     #: cannot find anything (:func:`omsd.engine.sensing.first_look_needed`); False with the
     #: fast paths off, or with a dialect's own sensor hooks (which look at every check)

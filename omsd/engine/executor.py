@@ -253,7 +253,7 @@ class Executor:
             targets[axis.index] = target
             if p.linear is not None:
                 linear.append(axis)
-        saved = {a.index: (a.vl, a.ac, a.vb) for a in linear}
+        saved = {a.index: (a.vl, a.ac, a.vb) for a in linear} if linear else {}
         if linear:
             self._interpolate(linear, targets, tick)
         restore = machine.options.linear_moves_restore

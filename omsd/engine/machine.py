@@ -155,8 +155,9 @@ class Machine(Core):
         ):
             return deadline
         axes = self.axes
-        if any(axis.gear is not None for axis in axes):
-            return deadline
+        for axis in axes:
+            if axis.gear is not None:
+                return deadline
         codes = self._quiet_codes
         best: float | None = None
         for axis in axes:

@@ -115,9 +115,12 @@ class CommandQueue:
     def reclaim(self) -> None:
         if self.loops or self.pc == 0:
             return
-        done = self.program[: self.pc]
-        del self.program[: self.pc]
-        self.used -= sum(op.slots for op in done)
+        program = self.program
+        used = self.used
+        for op in program[: self.pc]:
+            used -= op.slots
+        del program[: self.pc]
+        self.used = used
         self.pc = 0
 
     def flush(self) -> list[Op]:

@@ -39,6 +39,9 @@ class RampKind(Enum):
     CUSTOM = "custom"  # PCIx SR#: a DAR/DAB/DAE table
     SCURVE = "scurve"  # PCIx SS#: an AJ profile
 
+    # hashed by identity, in C: a move's kept profile is looked up by its ramp (Motion's note)
+    __hash__ = object.__hash__
+
 
 @dataclass(frozen=True, slots=True)
 class SCurve:

@@ -16,30 +16,39 @@ from omsd.engine.states import Motion
 from omsd.engine.world import LimitWiring
 
 _MATCHED = LimitWiring.MATCHED
+_IDLE = Motion.IDLE
 
 
 def next_event(axis: AxisState) -> tuple[float, str]:
-    best = (math.inf, "")
-    candidates: list[tuple[float | None, str]] = [
+    """The earliest of what happens next to the axis and when; ``(inf, "")``: nothing. Of
+    several at the same time, the first in this order."""
+    best, what = math.inf, ""
+    for when, kind in (
         (axis.end_tick(), "end"),
         (axis.sensor_check, "sensor"),
         (axis.in_fire, "in"),
         (axis.aux_timer, "aux"),
         (axis.outputs[0][0] if axis.outputs else None, "output"),
         (axis.servo_check_time(), "servo"),
-    ]
-    if axis.wait is not None and axis.wait.until is not None:
-        candidates.append((axis.wait.until, "wait"))
-    if axis.motion is not Motion.IDLE and axis.stall_phys is None:
-        candidates.append((_next_crossing(axis), "sensor"))
-    if axis.slip_detect and axis.stall_phys is not None and axis.motion is not Motion.IDLE:
-        candidates.append((_slip_crossing(axis), "sensor"))
-    if axis.backlash and axis.motion is not Motion.IDLE:  # a direction change
-        candidates.append((backlash_tick(axis), "sensor"))
-    for when, what in candidates:
-        if when is not None and when < best[0]:
-            best = (when, what)
-    return best
+    ):
+        if when is not None and when < best:
+            best, what = when, kind
+    wait = axis.wait
+    if wait is not None and wait.until is not None and wait.until < best:
+        best, what = wait.until, "wait"
+    if axis.motion is not _IDLE:
+        later: float | None = None
+        if axis.stall_phys is None:
+            later = _next_crossing(axis)
+        elif axis.slip_detect:
+            later = _slip_crossing(axis)
+        if later is not None and later < best:
+            best, what = later, "sensor"
+        if axis.backlash:  # a direction change
+            later = backlash_tick(axis)
+            if later is not None and later < best:
+                best, what = later, "sensor"
+    return best, what
 
 
 def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
@@ -160,7 +169,21 @@ def first_tick(axis: AxisState, level_counter: float, above: bool, t_from: float
     return None
 
 
+#: How far inside its limit switches (steps) the whole of a trajectory must stay for the search
+#: for crossings to be left out: more than a level's rounding to whole steps and
+#: ``Trajectory.first_time``'s own margin.
+CLEAR_MARGIN = 2.0
+
+
 def _next_crossing(axis: AxisState) -> float | None:
+    # fast path (issue 16): with only limits to look for, a trajectory whose whole extent stays
+    # clear of both switches crosses neither (each level would be found beyond its reach by
+    # Trajectory.first_time); tests/board/test_fast_paths.py runs it against the search
+    if axis.home is None and axis.travel_limits is None and axis.host.fast_paths:
+        lowest, highest = axis.traj.extent()
+        off = axis.phys_offset
+        if switches_clear(axis, lowest + off, highest + off, CLEAR_MARGIN):
+            return None
     t = axis.host.now
     best: float | None = None
     for level, above in _levels(axis, t):

@@ -35,6 +35,10 @@ class Motion(Enum):
     HOLD = auto()  # position-hold correction
     GEAR = auto()  # following a master axis (omsd.engine.gearing)
 
+    # Members are compared by identity; hashed by identity too, in C (Enum's own __hash__ is a
+    # Python function, run at every look-up in a set of motions: issue 16)
+    __hash__ = object.__hash__
+
 
 @dataclass(eq=False)
 class Wait:

@@ -50,7 +50,7 @@ class Trajectory:
     ) -> None:
         self.t0 = t0
         self.x0 = x0
-        self.pieces = tuple(p for p in pieces if p.duration > 0.0)
+        self.pieces = tuple(p for p in pieces if p.duration > 0.0) if pieces else ()
         starts: list[float] = []
         offsets: list[float] = []
         t = 0.0

@@ -35,7 +35,7 @@ from twin import Twin, state
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
-from omsd.engine import reactions
+from omsd.engine import reactions, sensing
 from omsd.engine.events import LimitEvent
 from omsd.engine.pieces import Cosine, Decay, Poly, Sinusoid, cruise
 from omsd.engine.ramps import RampKind, RampShape, move_pieces, profile_pieces
@@ -523,6 +523,63 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
         assert board.axes[0].motion is Motion.MOVE and board.axes[0].traj.t0 == end
     # the first move, begun by its command, is looked at by both; the second only by the reference
     assert looks.count(True) == 1 and looks.count(False) == 2
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    start=st.sampled_from([0.0, 0.5, -7.25, 1234.0]),
+    moves=st.lists(st.integers(-4000, 4000), min_size=1, max_size=3),
+    speed=st.sampled_from([(5000, 50000), (300, 1000), (100000, 1000000)]),
+    near=st.floats(-6.0, 6.0),
+    far=st.floats(0.0, 3000.0),
+    side=st.booleans(),
+    load=st.sampled_from(["", "LP100;", "LP-2.5;"]),
+    times=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=4),
+)
+def test_a_trajectory_clear_of_the_switches_crosses_none(
+    start: float,
+    moves: list[int],
+    speed: tuple[int, int],
+    near: float,
+    far: float,
+    side: bool,
+    load: str,
+    times: list[float],
+) -> None:
+    """``sensing._next_crossing`` leaves out the search for a trajectory whose whole extent stays
+    clear of both switches: what it answers is what the search answers, with one switch a few
+    steps (or a fraction of one) from where the moves end or begin and the other far, a counter
+    loaded away from the carriage, at times before, during and after the moves."""
+    stops = [start]
+    for d in moves:
+        stops.append(stops[-1] + d)
+    edge = (max(stops) if side else min(stops)) + near
+    world = AxisWorld(
+        start_position=start,
+        positive_limit=edge if side else max(stops) + far + 1.0,
+        negative_limit=min(stops) - far - 1.0 if side else edge,
+    )
+    if not world.negative_limit < world.positive_limit:
+        return
+    board = Board(get_model("PC48-4"), world={"X": world})
+    vl, ac = speed
+    board.receive(
+        f"AX;{load}VL{vl};AC{ac};".encode() + b"".join(f"MR{d};GO;".encode() for d in moves),
+        0.0,
+    )
+    axis = board.axes[0]
+    span = max(board.next_deadline() or 0.0, 0.01) * len(moves) * 2
+    for at in sorted(times):
+        board.advance(at * span)
+        if axis.motion is Motion.IDLE:
+            continue
+        fast = sensing._next_crossing(axis)
+        board.fast_paths = False
+        try:
+            plain = sensing._next_crossing(axis)
+        finally:
+            board.fast_paths = True
+        assert fast == plain
 
 
 def test_a_kept_move_profile_is_the_computed_one() -> None:
