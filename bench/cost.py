@@ -9,7 +9,7 @@ clients and the same traffic, measured over the same window at the same time.
 
 * Idle: 8 PC48-8 boards, a TCP client on each, connected (each asked ``WY`` once, to be sure it
   is attached) and then silent. Target (issue 7): <= 0.5 % of a core.
-* Load: 1, 8 and 32 PC48-8 boards on the driver link. On each, X, Y, Z, T jog (``JG``, both
+* Load: 1, 8, 32 and 128 PC48-8 boards on the driver link. On each, X, Y, Z, T jog (``JG``, both
   directions) and U, V, R, S run a queue of 30 back-and-forth moves (``MR3000 GO MR-3000 GO``,
   0.7 s each at VL5000 AC50000: a move ends, and the next starts, every 0.7 s on each of them),
   and a client polls the board with ``QA RP`` 10 times a second, one axis after the other
@@ -17,6 +17,9 @@ clients and the same traffic, measured over the same window at the same time.
   at 128 boards (issue 16); the cost should grow with the traffic (CPU per poll about the same
   at 1 and at the most boards) and not with time (the second half of the window costs what the
   first did). The baseline is the echo in ``count`` mode (the same reply for every poll).
+* Where the load's cost goes, at the most boards: the same boards and polls with nothing moving
+  (``at rest``) and with the jogs alone (no queued moves), each against the echo; what the
+  queued moves add, per move.
 """
 
 from __future__ import annotations
@@ -35,13 +38,17 @@ from bench.table import Row, Target
 MODEL = "PC48-8"
 AXES = "XYZTUVRS"
 PERIOD = 0.1  # QA RP 10 times a second
-SETUP = (
+PARAMETERS = (
     b"AA VL5000,5000,5000,5000,5000,5000,5000,5000;"
     b" AC50000,50000,50000,50000,50000,50000,50000,50000;"
-    b" AX JG2000; AY JG-2000; AZ JG3000; AT JG-3000;"
-    + b"".join(b" A" + a.encode() + b" " + b"MR3000 GO MR-3000 GO " * 15 for a in "UVRS")
-    + b"WY"
 )
+JOGS = b" AX JG2000; AY JG-2000; AZ JG3000; AT JG-3000;"
+MOVES = b"".join(b" A" + a.encode() + b" " + b"MR3000 GO MR-3000 GO " * 15 for a in "UVRS")
+SETUP = PARAMETERS + JOGS + MOVES + b"WY"
+#: The breakdown of the load's cost at the most boards: the same boards and polls with nothing
+#: moving, and with the jogs alone (no queued moves).
+BREAKDOWN = {"at rest": PARAMETERS + b"WY", "jogs alone": PARAMETERS + JOGS + b"WY"}
+WHAT_MOVES = {"at rest": "nothing moving", "jogs alone": "X, Y, Z, T jogging, no queued moves"}
 REPLY = re.compile(rb"[PM][ND][NL][NH]\n-?\d+\n")
 
 
@@ -192,11 +199,11 @@ class Load:
         return sum(halves) / self.polls
 
 
-def load_once(n: int, settings: Settings, directory: Path) -> Load:
+def load_once(n: int, settings: Settings, directory: Path, setup: bytes = SETUP) -> Load:
     with procs.omsd(boards("load", n), directory) as omsd:
         for i in range(n):
             with TcpPort(omsd.tcp(i)) as port:
-                port.write(SETUP)
+                port.write(setup)
                 answer = port.read_until(b"\n")
                 if b"PC48 ver" not in answer:
                     raise RuntimeError(f"the setup was refused: {answer!r}")
@@ -224,7 +231,7 @@ def load_once(n: int, settings: Settings, directory: Path) -> Load:
     )
 
 
-def engine_per_poll(seconds: float) -> float:
+def engine_per_poll(seconds: float, setup: bytes = SETUP) -> float:
     """CPU seconds per poll of the board engine and link alone, in this process and with no I/O:
     one board of the load (the same setup, ``QA RP`` every 0.1 s, run at its wake-ups as the
     daemon runs it: the moves nobody hears happen when the next poll comes) simulated for
@@ -238,7 +245,7 @@ def engine_per_poll(seconds: float) -> float:
     for _ in range(3):
         board = Board(get_model(MODEL), now=0.0)
         link = make_link("driver", board)
-        rest, t = SETUP, 0.0
+        rest, t = setup, 0.0
         while rest:
             rest = rest[link.from_host(rest, t, 1) :]
             link.to_host(t)
@@ -259,8 +266,18 @@ def engine_per_poll(seconds: float) -> float:
     return best
 
 
+def move_seconds() -> float:
+    """How long one of the load's queued moves takes (``MR3000`` at VL5000 AC50000, linear
+    ramps: 0.7 s; the next begins on its last tick)."""
+    from omsd.engine.ramps import RampShape, move_time
+
+    return move_time(3000.0, 5000.0, 50000.0, 0.0, RampShape())
+
+
 def load(settings: Settings, directory: Path) -> list[Row]:
     runs = [load_once(n, settings, directory) for n in settings.load_boards]
+    most = settings.load_boards[-1]
+    parts = {what: load_once(most, settings, directory, setup) for what, setup in BREAKDOWN.items()}
     rows: list[Row] = []
     for r in runs:
         target = {
@@ -280,8 +297,39 @@ def load(settings: Settings, directory: Path) -> list[Row]:
                 f" (utime + stime {1e3 * r.ticks:.0f} ms in all)",
             )
         )
+    for what, r in parts.items():
+        rows.append(
+            Row(
+                f"load cost, {r.boards} boards polled, {what}",
+                "% core",
+                r.ours,
+                r.theirs,
+                None,
+                f"{1e6 * r.per_poll():.0f} µs CPU per poll"
+                f" (baseline {1e6 * r.per_poll(False):.0f}): the same boards and polls as the"
+                f" load, {WHAT_MOVES[what]}",
+            )
+        )
     first, last = runs[0], runs[-1]
+    jogs = parts["jogs alone"]
+    moves = len("UVRS") / move_seconds() * PERIOD  # queued moves begun per poll of a board
+    per_move = (last.per_poll() - jogs.per_poll()) / moves
     engine = engine_per_poll(max(2.0, settings.load_seconds * 2))
+    engine_jogs = engine_per_poll(max(2.0, settings.load_seconds * 2), BREAKDOWN["jogs alone"])
+    rows.append(
+        Row(
+            f"load cost, {last.boards} boards: one queued move, CPU in omsd / in the engine alone",
+            "µs",
+            1e6 * per_move,
+            1e6 * (engine - engine_jogs) / moves,
+            None,
+            f"what the load's queued moves add per poll ({1e6 * last.per_poll():.0f} µs with them,"
+            f" {1e6 * jogs.per_poll():.0f} µs with the jogs alone), per move ({moves:.2f} a poll);"
+            " the baseline: the same in process, one board on the manual clock"
+            f" ({1e6 * engine:.1f} and {1e6 * engine_jogs:.1f} µs per poll), its data in the"
+            " processor's caches from one poll to the next",
+        )
+    )
     rows.append(
         Row(
             f"load cost, {last.boards} boards: the board engine alone / omsd as users run it",
