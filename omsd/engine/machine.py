@@ -49,6 +49,12 @@ class Machine(Core):
     dialect's queued commands and sensor looks to the engine's own; ``framing`` and
     ``options`` are the dialect's."""
 
+    # (Core's note on slots)
+    __slots__ = (
+        "_quiet_codes",
+        "executor",
+    )
+
     def __init__(
         self,
         model: Model,

@@ -728,3 +728,32 @@ def test_first_time_says_the_same_with_and_without_the_extent(
         m.setattr(Trajectory, "extent", lambda self: (-math.inf, math.inf))
         plain = [traj.first_time(*q) for q in questions]
     assert fast == plain
+
+
+# -- the engine's attributes in slots ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_the_engine_keeps_its_attributes_in_slots(model: str) -> None:
+    """``AxisState``, ``Core``, ``Machine`` and ``Interpreter`` declare their attributes in
+    ``__slots__`` (Python 3.11 shares no more than 30 attribute names between the instances of a
+    class; past that every instance has a slower dict of its own). A new attribute left out of
+    them would land in the instance's dict: after a session of every kind of command (and a
+    reset), an axis has nothing there, and a board and its interpreter stay well below 30."""
+    rng = random.Random(model)
+    board = Board(get_model(model), world=WORLD)
+    t = 0.0
+    for statement in STATEMENTS * 2:
+        board.receive(statement.encode(), t)
+        t += 0.05
+        board.advance(t)
+    for _ in range(20):
+        board.receive(command_soup(rng, board.model, 40), t)
+        t += 0.05
+        board.advance(t)
+    board.receive(b"RS;", t)
+    board.advance(t + 1.0)
+    for axis in board.axes:
+        assert vars(axis) == {}, (model, axis.letter)
+    assert len(vars(board)) <= 20, sorted(vars(board))
+    assert len(vars(board.interpreter)) <= 20, sorted(vars(board.interpreter))
