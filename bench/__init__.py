@@ -25,4 +25,7 @@ The benchmarks:
 * :mod:`bench.startup`    the commands a user types, and the daemon's first accept;
 * :mod:`bench.isolation`  one board's replies while another's client misbehaves; churn cycles;
 * :mod:`bench.peers`      other simulators beside omsd (``--peers`` only).
+
+Beside the table, :mod:`bench.instructions` counts the machine instructions of one poll of the
+load's board in the engine (valgrind): a figure that does not move with the machine's load.
 """

@@ -222,3 +222,38 @@ def test_the_expected_end_of_a_move_is_on_the_sample_grid() -> None:
     ticks = expected * RATE - 0.5
     assert ticks == int(ticks)
     assert duration <= expected - 0.5 / RATE < duration + 1 / RATE
+
+
+def test_instructions_per_poll_are_counted(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``python -m bench.instructions`` (a developer's tool, not a row): callgrind's count of one
+    board of the load, a short run and a longer one, the difference per poll."""
+    import shutil
+
+    from bench import instructions
+
+    if shutil.which("valgrind") is None:
+        pytest.skip("valgrind is not installed")
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(instructions, "SHORT", 0.3)
+    monkeypatch.setattr(instructions, "LONG", 0.6)
+    assert instructions.main(["at rest"]) == 0
+    out = capsys.readouterr().out
+    found = re.fullmatch(r"at rest +([\d,]+) instructions per poll\n", out)
+    assert found is not None, out
+    assert int(found[1].replace(",", "")) > 1000
+
+
+def test_an_unknown_variant_of_the_instruction_count_is_refused() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "bench.instructions", "nope"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 2
+    assert result.stderr.splitlines()[-1] == (
+        "python -m bench.instructions: error: no variant 'nope' (of load, at rest, jogs alone)"
+    )
