@@ -47,7 +47,10 @@ PARAMETERS = (
     b" AC50000,50000,50000,50000,50000,50000,50000,50000;"
 )
 JOGS = b" AX JG2000; AY JG-2000; AZ JG3000; AT JG-3000;"
-MOVES = b"".join(b" A" + a.encode() + b" " + b"MR3000 GO MR-3000 GO " * 15 for a in "UVRS")
+MOVES_QUEUED = 30  # on each of U, V, R, S
+MOVES = b"".join(
+    b" A" + a.encode() + b" " + b"MR3000 GO MR-3000 GO " * (MOVES_QUEUED // 2) for a in "UVRS"
+)
 SETUP = PARAMETERS + JOGS + MOVES + b"WY"
 #: The breakdown of the load's cost at the most boards: the same boards and polls with nothing
 #: moving, and with the jogs alone (no queued moves).
@@ -332,8 +335,10 @@ def load(settings: Settings, directory: Path) -> list[Row]:
     jogs = parts["jogs alone"]
     moves = len("UVRS") / move_seconds() * PERIOD  # queued moves begun per poll of a board
     per_move = (last.per_poll() - jogs.per_poll()) / moves
-    engine = engine_per_poll(max(2.0, settings.load_seconds * 2))
-    engine_jogs = engine_per_poll(max(2.0, settings.load_seconds * 2), BREAKDOWN["jogs alone"])
+    # (in process, within the queues' length: 30 moves an axis, then the queued axes stand still)
+    window = min(max(2.0, settings.load_seconds * 2), 0.9 * MOVES_QUEUED * move_seconds())
+    engine = engine_per_poll(window)
+    engine_jogs = engine_per_poll(window, BREAKDOWN["jogs alone"])
     rows.append(
         Row(
             f"load cost, {last.boards} boards: one queued move, CPU in omsd / in the engine alone",
@@ -342,7 +347,8 @@ def load(settings: Settings, directory: Path) -> list[Row]:
             1e6 * (engine - engine_jogs) / moves,
             None,
             f"what the load's queued moves add per poll ({1e6 * last.per_poll():.0f} µs with them,"
-            f" {1e6 * jogs.per_poll():.0f} µs with the jogs alone), per move ({moves:.2f} a poll);"
+            f" {1e6 * jogs.per_poll():.0f} µs with the jogs alone, a run of its own: a difference"
+            f" of two timed runs, as noisy as both), per move ({moves:.2f} a poll);"
             " the baseline: the same in process, one board on the manual clock"
             f" ({1e6 * engine:.1f} and {1e6 * engine_jogs:.1f} µs per poll), its data in the"
             " processor's caches from one poll to the next",

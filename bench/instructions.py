@@ -42,7 +42,8 @@ COLLECTED = re.compile(r"Collected : (\d+)")
 
 def count(variant: str, seconds: float, root: Path) -> tuple[int, int]:
     """Instructions of the whole child run, and its polls."""
-    env = {**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": str(root)}
+    path = os.pathsep.join(p for p in (str(root), os.environ.get("PYTHONPATH")) if p)
+    env = {**os.environ, "PYTHONHASHSEED": "0", "PYTHONPATH": path}
     result = subprocess.run(
         [
             "valgrind",

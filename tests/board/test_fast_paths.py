@@ -26,7 +26,7 @@ from types import ModuleType
 from typing import Any
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from robustness import test_sessions as robust_sessions
 from robustness.conftest import stream_settings
@@ -536,6 +536,9 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
     load=st.sampled_from(["", "LP100;", "LP-2.5;"]),
     times=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=4),
 )
+# a switch a hair beyond where the move ends, on either side: reached on its last tick
+@example(0.0, [3000], (5000, 50000), 1e-12, 100.0, True, "", [0.25])
+@example(0.0, [-3000], (5000, 50000), -1e-12, 100.0, False, "", [0.25])
 def test_a_trajectory_clear_of_the_switches_crosses_none(
     start: float,
     moves: list[int],
@@ -549,7 +552,8 @@ def test_a_trajectory_clear_of_the_switches_crosses_none(
     """``sensing._next_crossing`` leaves out the search for a trajectory whose whole extent stays
     clear of both switches: what it answers is what the search answers, with one switch a few
     steps (or a fraction of one) from where the moves end or begin and the other far, a counter
-    loaded away from the carriage, at times before, during and after the moves."""
+    loaded away from the carriage, at times before, during and after the moves. (With no margin
+    at all, the examples fail.)"""
     stops = [start]
     for d in moves:
         stops.append(stops[-1] + d)
@@ -733,13 +737,19 @@ def test_first_time_says_the_same_with_and_without_the_extent(
 # -- the engine's attributes in slots ------------------------------------------------------------
 
 
+#: What ``Board`` and the PCIx interpreter set of their own (they keep a dict for it).
+BOARD_OWN = {"_replies", "_replies_epoch", "_scans", "dialect", "interpreter", "pure_reports"}
+PCIX_OWN = {"macros", "table", "table_points"}
+
+
 @pytest.mark.parametrize("model", sorted(MODELS))
 def test_the_engine_keeps_its_attributes_in_slots(model: str) -> None:
     """``AxisState``, ``Core``, ``Machine`` and ``Interpreter`` declare their attributes in
     ``__slots__`` (Python 3.11 shares no more than 30 attribute names between the instances of a
     class; past that every instance has a slower dict of its own). A new attribute left out of
     them would land in the instance's dict: after a session of every kind of command (and a
-    reset), an axis has nothing there, and a board and its interpreter stay well below 30."""
+    reset), an axis has nothing there, and a board and its interpreter only what their own
+    classes (``Board``, a dialect's interpreter) set."""
     rng = random.Random(model)
     board = Board(get_model(model), world=WORLD)
     t = 0.0
@@ -755,5 +765,5 @@ def test_the_engine_keeps_its_attributes_in_slots(model: str) -> None:
     board.advance(t + 1.0)
     for axis in board.axes:
         assert vars(axis) == {}, (model, axis.letter)
-    assert len(vars(board)) <= 20, sorted(vars(board))
-    assert len(vars(board.interpreter)) <= 20, sorted(vars(board.interpreter))
+    assert set(vars(board)) <= BOARD_OWN, sorted(set(vars(board)) - BOARD_OWN)
+    assert set(vars(board.interpreter)) <= PCIX_OWN, sorted(set(vars(board.interpreter)) - PCIX_OWN)
