@@ -23,6 +23,7 @@ inputs and make encoders slip, as a technician would at the bench.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from enum import Enum
 
@@ -46,6 +47,10 @@ class LimitWiring(Enum):
     NORMALLY_CLOSED = "normally_closed"
 
 
+#: The positions of an axis's world (motor steps, physical frame).
+POSITIONS = ("start_position", "negative_limit", "positive_limit", "home_low", "home_high")
+
+
 @dataclass(frozen=True)
 class AxisWorld:
     """Configuration of one axis's stage. Defaults are chosen so that a newcomer's first
@@ -61,6 +66,18 @@ class AxisWorld:
     limit_switches: LimitWiring = LimitWiring.MATCHED
     encoder_counts_per_rev: int = 4_000
     encoder_index: int = 0  # encoder count, modulo a revolution, where the index pulse is
+
+    def __post_init__(self) -> None:
+        # a switch is somewhere: math.inf for "no switch" would fail deep in the search for
+        # crossings (a whole step beyond it), so it is refused here, as the configuration file
+        # and the control API refuse it (a far position does what "none" would)
+        for name in POSITIONS:
+            value = getattr(self, name)
+            if not math.isfinite(value):
+                raise ValueError(
+                    f"AxisWorld {name}: expected a finite number of motor steps, got {value!r}"
+                    " (for a switch out of reach, a far position: the default is 10,000,000)"
+                )
 
     def with_changes(self, **changes: object) -> AxisWorld:
         return replace(self, **changes)  # type: ignore[arg-type]

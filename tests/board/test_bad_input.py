@@ -11,6 +11,7 @@ The board never raises, whatever it is fed, and its memory stays bounded.
 
 from __future__ import annotations
 
+import math
 import random
 import tracemalloc
 
@@ -18,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from omsd.board import AxisWorld
 from omsd.board.board import Board
 from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
@@ -580,3 +582,17 @@ def test_pcix_numbers_beyond_32_bits_are_command_errors(line: str, error: bool) 
     h = Harness("PCIX-400")
     h.send(line + "\n")
     assert bool(h.errors()) is error
+
+
+@pytest.mark.parametrize(
+    "name", ["start_position", "negative_limit", "positive_limit", "home_low", "home_high"]
+)
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan])
+def test_a_world_position_that_is_not_finite_is_refused(name: str, value: float) -> None:
+    """Through the Python API (``Board``, ``Harness``, the pytest fixture) as through the
+    configuration file and the control API: a switch at infinity is refused at once, in one
+    line that names the key, rather than failing in the middle of a jog (``math.ceil(inf)``)."""
+    with pytest.raises(ValueError, match=rf"^AxisWorld {name}: expected a finite number"):
+        AxisWorld(**{name: value})
+    with pytest.raises(ValueError, match=rf"^AxisWorld {name}: expected a finite number"):
+        AxisWorld().with_changes(**{name: value})
