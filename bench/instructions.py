@@ -32,9 +32,9 @@ VARIANTS = {"load": SETUP, **BREAKDOWN}
 #: The child: one board of the load, set up, then polled for argv[2] seconds.
 CHILD = """
 import sys
-from bench.cost import BREAKDOWN, SETUP, engine_board, run_engine
-setup = {"load": SETUP, **BREAKDOWN}[sys.argv[1]]
-link, t = engine_board(setup)
+from bench.cost import engine_board, run_engine
+from bench.instructions import VARIANTS
+link, t = engine_board(VARIANTS[sys.argv[1]])
 print(run_engine(link, t, float(sys.argv[2])))
 """
 COLLECTED = re.compile(r"Collected : (\d+)")

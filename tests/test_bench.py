@@ -125,15 +125,20 @@ def table_rows(output: str) -> dict[str, list[str]]:
     return rows
 
 
-def test_quick_run_measures_and_prints_every_row() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench", "--quick"],
+def bench(module: str, *args: str, timeout: float) -> subprocess.CompletedProcess[str]:
+    """``python -m MODULE ARGS...`` from the repository, its output captured."""
+    return subprocess.run(
+        [sys.executable, "-m", module, *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
-        timeout=300,
+        timeout=timeout,
         stdin=subprocess.DEVNULL,
     )
+
+
+def test_quick_run_measures_and_prints_every_row() -> None:
+    result = bench("bench", "--quick", timeout=300)
     report = f"stdout:\n{result.stdout}\nstderr:\n{result.stderr[-3000:]}"
     assert result.returncode == 0, report
     assert "machine: " in result.stdout, report
@@ -246,13 +251,7 @@ def test_instructions_per_poll_are_counted(
 
 
 def test_an_unknown_variant_of_the_instruction_count_is_refused() -> None:
-    result = subprocess.run(
-        [sys.executable, "-m", "bench.instructions", "nope"],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    result = bench("bench.instructions", "nope", timeout=60)
     assert result.returncode == 2
     assert result.stderr.splitlines()[-1] == (
         "python -m bench.instructions: error: no variant 'nope' (of load, at rest, jogs alone)"

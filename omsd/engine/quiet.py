@@ -32,7 +32,7 @@ from collections.abc import Collection
 
 from omsd.engine.axis import Axis
 from omsd.engine.queue import Op
-from omsd.engine.sensing import looks_at_nothing_else, switches_clear
+from omsd.engine.sensing import SWITCH_MARGIN, looks_at_nothing_else, switches_clear
 from omsd.engine.states import Motion
 
 #: Queued commands after which an axis stays quiet: moves, jogs, timed waits and the parameters
@@ -43,9 +43,6 @@ MOVE_BY = frozenset({"MR", "ML"})
 JOGS = frozenset({"JG", "JF"})
 #: Motions a quiet axis may be in (not a home search, a hold, a contour, a servo's own).
 QUIET_MOTIONS = frozenset({Motion.IDLE, Motion.MOVE, Motion.JOG, Motion.STOP})
-#: How far inside its limit switches (steps) the whole reach of a quiet axis must stay: the
-#: switches are seen on whole steps, and a move's target is truncated to one.
-SWITCH_MARGIN = 2.0
 
 
 def quiet(axis: Axis, codes: Collection[str]) -> bool:
@@ -72,7 +69,7 @@ def quiet(axis: Axis, codes: Collection[str]) -> bool:
     if reach is None:
         return False
     lowest, highest = reach
-    offset = axis.phys_offset
+    offset = axis.phys_offset  # (the whole reach of the queue, SWITCH_MARGIN inside the switches)
     return switches_clear(axis, lowest + offset, highest + offset, SWITCH_MARGIN)
 
 

@@ -18,6 +18,13 @@ from omsd.engine.world import LimitWiring
 _MATCHED = LimitWiring.MATCHED
 _IDLE = Motion.IDLE
 
+#: How far inside its limit switches (steps) a span must stay to be taken as clear of them
+#: (:func:`switches_clear`) where the fast paths leave a search out: the whole of a trajectory
+#: (:func:`_next_crossing`), the whole reach of a quiet axis's queue (``omsd.engine.quiet``).
+#: Switches are seen on whole steps, a move's target is truncated to one, and
+#: ``Trajectory.first_time`` has a margin of its own: more than any of them.
+SWITCH_MARGIN = 2.0
+
 
 def next_event(axis: AxisState) -> tuple[float, str]:
     """The earliest of what happens next to the axis and when; ``(inf, "")``: nothing. Of
@@ -169,12 +176,6 @@ def first_tick(axis: AxisState, level_counter: float, above: bool, t_from: float
     return None
 
 
-#: How far inside its limit switches (steps) the whole of a trajectory must stay for the search
-#: for crossings to be left out: more than a level's rounding to whole steps and
-#: ``Trajectory.first_time``'s own margin.
-CLEAR_MARGIN = 2.0
-
-
 def _next_crossing(axis: AxisState) -> float | None:
     # fast path (issue 16): with only limits to look for, a trajectory whose whole extent stays
     # clear of both switches crosses neither (each level would be found beyond its reach by
@@ -182,7 +183,7 @@ def _next_crossing(axis: AxisState) -> float | None:
     if axis.home is None and axis.travel_limits is None and axis.host.fast_paths:
         lowest, highest = axis.traj.extent()
         off = axis.phys_offset
-        if switches_clear(axis, lowest + off, highest + off, CLEAR_MARGIN):
+        if switches_clear(axis, lowest + off, highest + off, SWITCH_MARGIN):
             return None
     t = axis.host.now
     best: float | None = None
