@@ -23,6 +23,7 @@ from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor, OpFunction, SensorHook
 from omsd.engine.extensions import BARE, Framing, Options
+from omsd.engine.follow_on import follow_on, own_move_codes
 from omsd.engine.ops_flow import FLOW_OPS
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.ops_parameters import PARAMETER_OPS
@@ -51,6 +52,7 @@ class Machine(Core):
 
     # (Core's note on slots)
     __slots__ = (
+        "_follow_on_codes",
         "_quiet_codes",
         "executor",
     )
@@ -68,7 +70,8 @@ class Machine(Core):
         fast_paths: bool = True,
     ) -> None:
         super().__init__(model, now, world, framing, options or Options(), fast_paths)
-        self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
+        table = {**ENGINE_OPS, **(ops or {})}
+        self.executor = Executor(self, table, sensor_hooks)
         if sensor_hooks:
             self.plain_sensing = False  # (the PCIx: its hook looks at the home switch each time)
         # the quiet commands (omsd.engine.quiet) that run the engine's own code on this board
@@ -76,6 +79,8 @@ class Machine(Core):
         self._quiet_codes = frozenset(
             code for code in QUIET_OPS if own.get(code, ENGINE_OPS[code]) is ENGINE_OPS[code]
         )
+        # the move commands a queued move may follow on with (omsd.engine.follow_on)
+        self._follow_on_codes = own_move_codes(table)
         self.power_up(now)
 
     # -- power ----------------------------------------------------------------------------------
@@ -250,27 +255,31 @@ class Machine(Core):
         step = self.executor.step
         front = self.front
         skip_idle = self.fast_paths
+        codes = self._follow_on_codes
         self.unsettle()
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:
-                # fast path: an axis with no wait and nothing left in its queue, or waiting for
+                # fast paths: an axis with no wait and nothing left in its queue, or waiting for
                 # its own motion to end while it still moves (and its mover is the waiting
                 # command's sender, as Executor.step would make it), is not stepped:
-                # Executor.step would return False at once, changing nothing
+                # Executor.step would return False at once, changing nothing. One whose motion
+                # has ended, with a move and GO next in its queue, starts that move in
+                # omsd.engine.follow_on, as Executor.step would
                 if skip_idle:
                     wait = axis.wait
                     q = axis.queue
                     if wait is None:
                         if q.pc >= len(q.program):
                             continue
-                    elif (
-                        wait.kind == "motion"
-                        and axis.motion is not _IDLE
-                        and q.pc < len(q.program)
-                        and q.program[q.pc].source == axis.source
-                    ):
-                        continue
+                    elif wait.kind == "motion":
+                        if axis.motion is not _IDLE:
+                            if q.pc < len(q.program) and q.program[q.pc].source == axis.source:
+                                continue
+                        elif follow_on(self, axis, codes, t):
+                            # (not progress another round must look at: the front, pumped
+                            # after the axes, sees the room it made in this round)
+                            continue
                 if step(axis, t):
                     progressed = True
             if front.pump(t):

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from omsd.engine.pieces import Chain, Cosine, Decay, Piece, Poly, cruise, mirrored, scaled
+from omsd.engine.trajectory import Course
 
 _BISECT_ITERATIONS = 80
 
@@ -351,6 +352,15 @@ def _kept_profile(
     distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
 ) -> tuple[Piece, ...]:
     return tuple(profile_pieces(distance, vmax, accel, vbase, shape))
+
+
+@functools.lru_cache(maxsize=PROFILES_KEPT)
+def kept_course(
+    distance: float, vmax: float, accel: float, vbase: float, shape: RampShape
+) -> Course:
+    """The :class:`~omsd.engine.trajectory.Course` of :func:`move_pieces`' profile (fast path,
+    issue 16: a queued move that follows on, ``omsd.engine.follow_on``)."""
+    return Course(_kept_profile(distance, vmax, accel, vbase, shape))
 
 
 def profile_pieces(

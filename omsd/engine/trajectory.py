@@ -34,6 +34,7 @@ class Trajectory:
     """
 
     __slots__ = (
+        "_course",
         "_extent",
         "_offsets",
         "_starts",
@@ -69,10 +70,33 @@ class Trajectory:
             final = x if math.isfinite(t) else math.nan
         self.final = final
         self._extent: tuple[float, float] | None = None
+        self._course: Course | None = None
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
         return cls(t0, x, (), final=x)
+
+    @classmethod
+    def along(cls, t0: float, x0: float, course: Course, final: float) -> Trajectory:
+        """``Trajectory(t0, x0, course.pieces, final)``, from what the course has worked out
+        already (see :class:`Course`): the same numbers, to the last bit."""
+        traj = cls.__new__(cls)
+        traj.t0 = t0
+        traj.x0 = x0
+        traj.pieces = course.pieces
+        traj._starts = course.starts
+        offsets: list[float] = []
+        x = x0
+        for step in course.steps:  # (the same sums, in the same order, as __init__'s)
+            offsets.append(x)
+            x += step
+        traj._offsets = offsets
+        traj.duration = course.duration
+        traj.end_time = t0 + course.duration
+        traj.final = final
+        traj._extent = None
+        traj._course = course
+        return traj
 
     @property
     def is_finite(self) -> bool:
@@ -161,6 +185,8 @@ class Trajectory:
         after included (``-inf``/``inf`` on the side a piece without end heads to). Found once:
         at the ends of each piece and where its velocity changes sign (its turning points), the
         only places a piece's position can be extreme."""
+        if self._extent is None and self._course is not None:
+            self._extent = self._course.extent(self._offsets, self.x0, self.final)
         if self._extent is None:
             lowest = highest = self.x0
             for base, piece in zip(self._offsets, self.pieces, strict=True):
@@ -184,6 +210,52 @@ class Trajectory:
                 lowest, highest = min(lowest, self.final), max(highest, self.final)
             self._extent = (lowest, highest)
         return self._extent
+
+
+class Course:
+    """A finite motion's pieces and what a :class:`Trajectory` works out from them that does
+    not depend on where or when the motion starts: when each piece starts, how far each takes
+    the axis, how long it all lasts, and where within each piece the position can be extreme
+    (its ends and turning points, :meth:`Trajectory.extent`). Fast path (issue 16): kept with a
+    kept move profile (``omsd.engine.ramps.kept_course``), so that a move a queue repeats costs
+    a trajectory the sums that depend on its start alone (:meth:`Trajectory.along`). The numbers
+    are those ``Trajectory`` computes, in the same order: the same results to the last bit
+    (``tests/board/test_fast_paths.py``)."""
+
+    __slots__ = ("duration", "extremes", "pieces", "starts", "steps")
+
+    def __init__(self, pieces: Sequence[Piece]) -> None:
+        self.pieces = tuple(p for p in pieces if p.duration > 0.0)
+        starts: list[float] = []
+        steps: list[float] = []
+        extremes: list[tuple[float, ...]] = []
+        t = 0.0
+        for p in self.pieces:
+            if not math.isfinite(p.duration):
+                raise ValueError("a course is a finite motion")
+            starts.append(t)
+            t += p.duration
+            steps.append(p.x(p.duration))
+            extremes.append(tuple(p.x(tau) for tau in (0.0, p.duration, *p.turning_points())))
+        self.starts = starts
+        self.steps = steps
+        self.extremes = extremes
+        self.duration = t
+
+    def extent(self, offsets: list[float], x0: float, final: float) -> tuple[float, float]:
+        """:meth:`Trajectory.extent` of this course started at ``x0`` (``offsets``: where each
+        piece begins) and ending at ``final``."""
+        lowest = highest = x0
+        for base, points in zip(offsets, self.extremes, strict=True):
+            for point in points:
+                x = base + point
+                if x < lowest:
+                    lowest = x
+                elif x > highest:
+                    highest = x
+        if self.pieces:
+            lowest, highest = min(lowest, final), max(highest, final)
+        return lowest, highest
 
 
 def segment(traj: Trajectory, a: float, b: float) -> list[Piece]:

@@ -35,10 +35,11 @@ from twin import Twin, state
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
-from omsd.engine import reactions, sensing
+from omsd.engine import follow_on, reactions, sensing
+from omsd.engine import machine as machine_module
 from omsd.engine.events import LimitEvent
 from omsd.engine.pieces import Cosine, Decay, Poly, Sinusoid, cruise
-from omsd.engine.ramps import RampKind, RampShape, move_pieces, profile_pieces
+from omsd.engine.ramps import RampKind, RampShape, kept_course, move_pieces, profile_pieces
 from omsd.engine.states import Motion
 from omsd.engine.trajectory import Trajectory
 from omsd.engine.world import LimitWiring
@@ -68,6 +69,12 @@ STATEMENTS = [
     "\x04",
     "AM;MR10,20;GO;",
     "AX;VL100000;AC1000000;MR1000000;GO;",
+    # queues of moves that follow on (omsd.engine.follow_on), and some that may not: a move by
+    # nothing, a move in AA mode (a group), in a loop, at a base velocity, near Y's switch
+    "AX;VL5000;AC50000;MR300;GO;MR-300;GO;MA100;GO;MA100;GO;MR-100;GO;",
+    "AY;VL2000;AC20000;VB200;MR400;GO;MR-400;GO;MR400;GO;",
+    "AZ;LS2;MR40;GO;MR-40;GO;LE;MR0;GO;MR1;GO;",
+    "AA;MR10,10;GO;MR-10,-10;GO;",
 ]
 SEPARATORS = ["", " ", ";", "\r", "  ", "\n"]
 #: A stage with its switches within reach of the moves above.
@@ -523,6 +530,106 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
         assert board.axes[0].motion is Motion.MOVE and board.axes[0].traj.t0 == end
     # the first move, begun by its command, is looked at by both; the second only by the reference
     assert looks.count(True) == 1 and looks.count(False) == 2
+
+
+@pytest.mark.parametrize(
+    ("model", "queue", "follow"),
+    [
+        ("PC48-8", "AU;VL5000;AC50000;MR3000;GO;MR-3000;GO;MA7;GO;MR2;GO;MA-9;GO;", 4),
+        # encoder counts (MR in counts, divided by the ratio), a base velocity
+        ("PC48-4E", "AX;ER2,1;VL900;AC9000;VB100;MR301;GO;MR-301;GO;MA-55;GO;", 2),
+        ("PCIX-040", "AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;MA7;GO;", 2),
+        ("VS4-040", "AX;VL700;AC7000;MR100;GO;MR-100;GO;MR100;GO;", 2),
+        # a loop: each pass's second move follows on; its first follows the loop's end
+        ("PC46-4E", "AX;LS3;MR40;GO;MR-40;GO;LE;", 3),
+        # a move that ends on its switch, and one that follows on from there: looked at on its
+        # first tick, it finds the limit (the queue is flushed)
+        ("PC48-4", "AX;VL5000;AC50000;MR3000;GO;MR10;GO;MR-10;GO;", 1),
+    ],
+)
+def test_a_queued_move_follows_on_as_the_straightforward_board_does(
+    model: str, queue: str, follow: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A queue of moves, run end by end (and polled between): the moves that follow on take the
+    fast path (a change that quietly stopped taking it would pass the rest), and the twin boards
+    agree in everything after every step (:class:`twin.Twin` compares them)."""
+    taken: list[bool] = []
+
+    def counted(*args: Any) -> bool:
+        result = follow_on.follow_on(*args)
+        taken.append(result)
+        return result
+
+    monkeypatch.setattr(machine_module, "follow_on", counted)
+    twin = Twin(get_model(model), world={"X": AxisWorld(positive_limit=3000.0)})
+    twin.receive(queue.encode(), 0.0, 1)
+    now, ends = 0.0, 0
+    while (d := twin.next_deadline()) is not None and ends < 40:
+        twin.advance(now := d)
+        twin.receive(b"RP;", now + 0.01, 1)
+        ends += 1
+    assert all(axis.queue.empty for axis in twin.fast.axes)
+    assert taken.count(True) == follow
+
+
+def test_a_move_that_cannot_follow_on_goes_the_straightforward_way(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A move by nothing, a move in a group (AA), a servo axis's move: refused, and the twins
+    still agree."""
+    taken: list[bool] = []
+
+    def counted(*args: Any) -> bool:
+        result = follow_on.follow_on(*args)
+        taken.append(result)
+        return result
+
+    monkeypatch.setattr(machine_module, "follow_on", counted)
+    twin = Twin(get_model("PC48-8"))
+    twin.receive(b"AX;VL5000;AC50000;MR300;GO;MR0;GO;AA;MR10,10;GO;MR-10,-10;GO;", 0.0, 1)
+    now = 0.0
+    while (d := twin.next_deadline()) is not None:
+        twin.advance(now := d)
+    servo = Twin(get_model("PCIX-400"))
+    servo.receive(b"AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;", 0.0, 1)
+    while (d := servo.next_deadline()) is not None and now < 5.0:
+        servo.advance(now := d)
+    assert taken and not any(taken)
+
+
+@pytest.mark.parametrize("shape", [RampShape(), RampShape(RampKind.PARABOLIC, 5)])
+@settings(max_examples=200, deadline=None)
+@given(
+    distance=st.integers(-100_000, 100_000).filter(bool),
+    speed=st.sampled_from([(5000.0, 50000.0, 0.0), (300.0, 1000.0, 50.0), (1e5, 1e6, 10.0)]),
+    t0=st.floats(0.0, 1e4),
+    x0=st.floats(-1e7, 1e7),
+    times=st.lists(st.floats(-1.0, 30.0), min_size=1, max_size=5),
+)
+def test_a_trajectory_along_a_kept_course_is_the_computed_one(
+    shape: RampShape,
+    distance: int,
+    speed: tuple[float, float, float],
+    t0: float,
+    x0: float,
+    times: list[float],
+) -> None:
+    """``Trajectory.along`` a kept course (the follow-on's fast path) is, to the last bit, the
+    trajectory ``Trajectory`` computes from the same pieces: its sums, its extent, and where it
+    is when."""
+    vmax, accel, vbase = speed
+    pieces = move_pieces(float(distance), vmax, accel, vbase, shape)
+    course = kept_course(float(distance), vmax, accel, vbase, shape)
+    final = x0 + distance
+    fast = Trajectory.along(t0, x0, course, final)
+    plain = Trajectory(t0, x0, pieces, final)
+    assert fast.pieces == plain.pieces
+    assert (fast._starts, fast._offsets) == (plain._starts, plain._offsets)
+    assert (fast.duration, fast.end_time, fast.final) == (plain.duration, plain.end_time, final)
+    assert fast.extent() == plain.extent()
+    for t in times:
+        at = t0 + t
+        assert (fast.position(at), fast.velocity(at)) == (plain.position(at), plain.velocity(at))
 
 
 @settings(max_examples=300, deadline=None)
