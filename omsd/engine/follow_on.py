@@ -22,13 +22,15 @@ import math
 from collections.abc import Mapping
 
 from omsd.engine.axis import Axis
+from omsd.engine.axis_state import steps
 from omsd.engine.core import Core
 from omsd.engine.executor import OpFunction
 from omsd.engine.ops_motion import MOTION_OPS
+from omsd.engine.queue import Op
 from omsd.engine.ramps import kept_course
 from omsd.engine.sensing import first_look_needed
 from omsd.engine.states import Motion, Wait
-from omsd.engine.trajectory import Trajectory
+from omsd.engine.trajectory import Course, Trajectory
 
 #: The move commands a move may follow on with: to a position, by a distance.
 MOVE_TO = frozenset({"MA", "MT"})
@@ -45,10 +47,10 @@ def own_move_codes(ops: Mapping[str, OpFunction]) -> frozenset[str]:
 
 
 def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> bool:
-    """At ``t``, ``axis`` is at rest and its queue waits for its motion to end (a ``Wait`` of
-    kind ``"motion"``): if the next commands are a move (``codes``: :func:`own_move_codes`) and
-    ``GO``, neither in a group with other axes, start that move as ``Executor.step`` would and
-    return True; otherwise change nothing and return False.
+    """At ``t``, in a settle, ``axis`` is at rest and its queue waits for its motion to end (a
+    ``Wait`` of kind ``"motion"``): if the next commands are a move (``codes``:
+    :func:`own_move_codes`) and ``GO``, neither in a group with other axes, start that move as
+    ``Executor.step`` would and return True; otherwise change nothing and return False.
 
     Left to the straightforward way: a wait with something to run or a jump at its end, a
     geared axis or one another axis follows, a servo axis, an aux output or an armed interrupt
@@ -57,11 +59,92 @@ def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> boo
     What it changes is the axis and its queue (and so the room in it) alone: no other axis, no
     group, no output, no input; so a settle that saw nothing else progress need not go round
     again for it (:meth:`~omsd.engine.machine.Machine.settle`)."""
+    tick = machine.clock.at_or_after(t)
+    move = _next_move(machine, axis, codes, tick, axis.traj.position(tick))
+    if move is None:
+        return False
+    _start(machine, axis, tick, move, machine.after_events)
+    return True
+
+
+def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
+    """At ``t``, in ``Machine.advance``, before the reactions to what is due: if everything due
+    is the end of a move (:func:`_ends_plainly`) on an axis whose queue then follows on with the
+    next (:func:`follow_on`'s conditions), end each and start its next move, leaving every axis
+    as ``reactions.on_end`` and then the settle's :func:`follow_on` leave it, and return True;
+    otherwise change nothing and return False.
+
+    Why together, and only so: between an axis's end and its queue's step the straightforward
+    way runs the reactions of the axes after it and the steps of the axes before it; here each
+    of them is another such end or follow-on, which touches its own axis alone (an axis with
+    nothing due takes no step forward either: what would let its queue go on is an event), so
+    their order changes nothing. The at-rest trajectory ``on_end`` gives the axis, which its next
+    move replaces on the same tick, is not made; what stays of the end is its position and the
+    held position it sets (``hold_goal``)."""
+    tick = machine.clock.at_or_after(t)
+    moves: list[tuple[Axis, float, _Move]] = []
+    for axis in machine.axes:
+        event = axis.event
+        when = axis.next_event_time() if event is None else event[0]
+        if when is None or when > t:
+            continue
+        if not _ends_plainly(axis, t):
+            return False
+        traj = axis.traj
+        x = float(steps(traj.position(t), traj.x0))  # (Axis.settle: on a whole step)
+        move = _next_move(machine, axis, codes, tick, x)
+        if move is None:
+            return False
+        moves.append((axis, x, move))
+    if not moves:
+        return False
+    for axis, x, move in moves:
+        axis.hold_goal = axis.track_enc + axis.ratio * (x - axis.track_counter)  # (on_end)
+        _start(machine, axis, tick, move, True)
+    return True
+
+
+def _ends_plainly(axis: Axis, t: float) -> bool:
+    """What is due for ``axis`` at ``t`` is the end of a move, and ``reactions.on_end`` would
+    leave it at rest with nothing more due at ``t`` and nothing to do but note where it is: no
+    hold (``Executor.check_hold``), no aux output, no servo loop, no look at the sensors, no
+    armed interrupt, no timer and no scheduled output."""
+    return (
+        axis.event is not None
+        and axis.event[1] == "end"
+        and axis.motion is _MOVE
+        and not axis.hold
+        and axis.servo is None
+        and axis.pa is None
+        and axis.sensor_check is None
+        and axis.in_fire is None
+        and axis.aux_timer is None
+        and not axis.outputs
+    )
+
+
+#: What :func:`_next_move` finds: the move's ``GO``, where it starts, its target, its distance
+#: and its course.
+_Move = tuple[Op, float, float, float, Course]
+
+
+def _next_move(
+    machine: Core, axis: Axis, codes: frozenset[str], tick: float, x: float
+) -> _Move | None:
+    """The move the axis's queue starts next, on ``tick`` from ``x``, if it follows on (see
+    :func:`follow_on`); ``None`` if not. Changes nothing."""
     wait = axis.wait
     queue = axis.queue
     program, pc = queue.program, queue.pc
-    if len(program) - pc < 3 or wait is None or wait.then is not None or wait.jump is not None:
-        return False
+    if (
+        len(program) - pc < 3
+        or wait is None
+        or wait.kind != "motion"
+        or wait.then is not None
+        or wait.jump is not None
+        or tick > machine.now
+    ):
+        return None
     move, go = program[pc + 1], program[pc + 2]
     code = move.code
     if (
@@ -74,39 +157,41 @@ def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> boo
         or axis.pa is not None
         or axis.in_arm is not None
     ):
-        return False
+        return None
     index = axis.index
     for other in machine.axes:  # (gearing.moved would have it follow: left to the general way)
         gear = other.gear
         if gear is not None and gear.master == index:
-            return False
-    tick = machine.clock.at_or_after(t)
-    if tick > machine.now:
-        return False
+            return None
     # Executor.start_pending's arithmetic: the target, from where the axis stands on the tick
-    x = axis.traj.position(tick)
     value = axis.to_motor(move.args[0])
     target = float(math.trunc(value)) if code in MOVE_TO else x + math.trunc(value)
     distance = target - x
     course = kept_course(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
     if not course.pieces:
-        return False
-    # the wait is over, the commands are passed, and GO starts the move (its sender's doing)
+        return None
+    return go, x, target, distance, course
+
+
+def _start(machine: Core, axis: Axis, tick: float, move: _Move, after_events: bool) -> None:
+    """The held command's wait is over, the move command and ``GO`` are passed, and ``GO``
+    starts the move (its sender's doing), as ``Executor.start_pending`` and ``Axis.begin`` from
+    rest on ``tick`` (``now``: nothing before it to keep) would."""
+    go, x, target, distance, course = move
+    queue = axis.queue
     queue.advance()
     queue.advance()
     saved = machine.talker
     machine.talker = axis.source = go.source
     axis.pending = None
     axis.direction = 1 if distance > 0 else -1
-    # Axis.begin from rest on this tick (``now`` is the tick: nothing before it to keep)
-    axis.traj = Trajectory.along(tick, x, course, target)  # (its profile and course are kept)
+    axis.traj = Trajectory.along(tick, x, course, target)
     axis.motion = _MOVE
     axis.in_position = False
-    if not (machine.after_events and machine.plain_sensing) or first_look_needed(axis, tick, _MOVE):
+    if not (after_events and machine.plain_sensing) or first_look_needed(axis, tick, _MOVE):
         axis.sensor_check = tick
     axis.contour_origin = None  # (gearing.moved, with no axis to follow this one)
     axis.home = None
     axis.wait = Wait("motion")
     axis.invalidate()
     machine.talker = saved
-    return True

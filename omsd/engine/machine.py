@@ -23,7 +23,7 @@ from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor, OpFunction, SensorHook
 from omsd.engine.extensions import BARE, Framing, Options
-from omsd.engine.follow_on import follow_on, own_move_codes
+from omsd.engine.follow_on import ends_that_follow_on, follow_on, own_move_codes
 from omsd.engine.ops_flow import FLOW_OPS
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.ops_parameters import PARAMETER_OPS
@@ -220,6 +220,9 @@ class Machine(Core):
         if self.init_until is not None and self.init_until <= t:
             self.init_until = None
             self.deadline_stale = True
+        # fast path: moves that end, each with the next in its queue (omsd.engine.follow_on)
+        if self.fast_paths and ends_that_follow_on(self, self._follow_on_codes, t):
+            return
         ex = self.executor
         for axis in self.axes:
             event = axis.event

@@ -37,7 +37,7 @@ from omsd.board import Board
 from omsd.board.world import AxisWorld
 from omsd.engine import follow_on, reactions, sensing
 from omsd.engine import machine as machine_module
-from omsd.engine.events import LimitEvent
+from omsd.engine.events import LimitEvent, SlipEvent
 from omsd.engine.pieces import Cosine, Decay, Poly, Sinusoid, cruise
 from omsd.engine.ramps import RampKind, RampShape, kept_course, move_pieces, profile_pieces
 from omsd.engine.states import Motion
@@ -532,6 +532,28 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
     assert looks.count(True) == 1 and looks.count(False) == 2
 
 
+def started(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
+    """Count the moves the follow-on's fast path starts: at an instant's ends
+    (``ends_that_follow_on``, before the reactions) and in a settle (``follow_on``)."""
+    taken = {"ends": 0, "settle": 0}
+    ends, settle = follow_on.ends_that_follow_on, follow_on.follow_on
+
+    def counted_ends(machine: Any, codes: Any, t: float) -> bool:
+        before = [axis.traj for axis in machine.axes]
+        result = ends(machine, codes, t)
+        taken["ends"] += sum(a.traj is not b for a, b in zip(machine.axes, before, strict=True))
+        return result
+
+    def counted_settle(*args: Any) -> bool:
+        result = settle(*args)
+        taken["settle"] += result
+        return result
+
+    monkeypatch.setattr(machine_module, "ends_that_follow_on", counted_ends)
+    monkeypatch.setattr(machine_module, "follow_on", counted_settle)
+    return taken
+
+
 @pytest.mark.parametrize(
     ("model", "queue", "follow"),
     [
@@ -553,14 +575,7 @@ def test_a_queued_move_follows_on_as_the_straightforward_board_does(
     """A queue of moves, run end by end (and polled between): the moves that follow on take the
     fast path (a change that quietly stopped taking it would pass the rest), and the twin boards
     agree in everything after every step (:class:`twin.Twin` compares them)."""
-    taken: list[bool] = []
-
-    def counted(*args: Any) -> bool:
-        result = follow_on.follow_on(*args)
-        taken.append(result)
-        return result
-
-    monkeypatch.setattr(machine_module, "follow_on", counted)
+    taken = started(monkeypatch)
     twin = Twin(get_model(model), world={"X": AxisWorld(positive_limit=3000.0)})
     twin.receive(queue.encode(), 0.0, 1)
     now, ends = 0.0, 0
@@ -569,7 +584,7 @@ def test_a_queued_move_follows_on_as_the_straightforward_board_does(
         twin.receive(b"RP;", now + 0.01, 1)
         ends += 1
     assert all(axis.queue.empty for axis in twin.fast.axes)
-    assert taken.count(True) == follow
+    assert sum(taken.values()) == follow
 
 
 def test_a_move_that_cannot_follow_on_goes_the_straightforward_way(
@@ -577,14 +592,7 @@ def test_a_move_that_cannot_follow_on_goes_the_straightforward_way(
 ) -> None:
     """A move by nothing, a move in a group (AA), a servo axis's move: refused, and the twins
     still agree."""
-    taken: list[bool] = []
-
-    def counted(*args: Any) -> bool:
-        result = follow_on.follow_on(*args)
-        taken.append(result)
-        return result
-
-    monkeypatch.setattr(machine_module, "follow_on", counted)
+    taken = started(monkeypatch)
     twin = Twin(get_model("PC48-8"))
     twin.receive(b"AX;VL5000;AC50000;MR300;GO;MR0;GO;AA;MR10,10;GO;MR-10,-10;GO;", 0.0, 1)
     now = 0.0
@@ -594,7 +602,69 @@ def test_a_move_that_cannot_follow_on_goes_the_straightforward_way(
     servo.receive(b"AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;", 0.0, 1)
     while (d := servo.next_deadline()) is not None and now < 5.0:
         servo.advance(now := d)
-    assert taken and not any(taken)
+    assert not any(taken.values())
+
+
+def test_moves_that_end_together_follow_on_together_or_the_straightforward_way(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two axes whose moves end on the same tick: both follow on at the instant's ends; with a
+    third whose queue then says something (``ID``), or with a look at the sensors due then
+    too, nothing takes that way (the reactions run in order), and the settle starts the moves
+    that follow on. The twins agree after every step."""
+    for queue, ends in (
+        ("AA;VL5000,5000;AC50000,50000;AX;MR300;GO;MR-300;GO;AY;MR300;GO;MR7;GO;", 2),
+        (
+            "AA;VL5000,5000,5000;AC50000,50000,50000;AX;MR300;GO;MR-300;GO;"
+            "AY;MR300;GO;MR7;GO;AZ;MR300;GO;ID;",
+            0,
+        ),
+    ):
+        taken = started(monkeypatch)
+        twin = Twin(get_model("PC48-8"))
+        twin.receive(queue.encode(), 0.0, 1)
+        while (d := twin.next_deadline()) is not None:
+            twin.advance(d)
+        assert taken["ends"] == ends and taken["ends"] + taken["settle"] == 2
+
+
+@pytest.mark.parametrize("slip", [0.0, 40.0])
+def test_a_held_axis_corrects_before_its_next_move(
+    slip: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Position maintenance (PC48 §6.15) on an encoder axis running a queue of moves: at a move's
+    end the hold looks first (``reactions.on_end``), and corrects a slip before the queue goes
+    on; the instant's ends are then not taken the fast way, and the twins agree."""
+    taken = started(monkeypatch)
+    twin = Twin(get_model("PC48-4E"))
+    twin.receive(b"AX;ER2,1;HV1000;HG10;HD1;HN;VL5000;AC50000;MR600;GO;MR-600;GO;MR60;GO;", 0.0, 1)
+    twin.inject_slip("X", slip, 0.05)
+    while (d := twin.next_deadline()) is not None:
+        twin.advance(d)
+    assert taken["ends"] == 0 and taken["settle"] == 2
+    assert twin.fast.axes[0].in_position
+
+
+def test_a_move_ending_with_a_look_due_then_is_ended_the_straightforward_way(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A slip a hair before a move's end (slip detection on, PC48 §6.16) makes a look at the
+    sensors due on the end's own tick: the reactions run in order (the end, then the look, which
+    finds the slip), not the fast way; the next move follows on in the settle after them."""
+    taken = started(monkeypatch)
+    twin = Twin(get_model("PC48-4E"))
+    twin.receive(b"AX;ER1,1;ES5;IS;VL5000;AC50000;MR300;GO;MR-300;GO;MR50;GO;", 0.0, 1)
+    end = twin.next_deadline()
+    while end is not None and twin.fast.axes[0].traj.t0 == 0.0:  # the first move's end
+        twin.advance(end)
+        end = twin.next_deadline()
+    end = twin.fast.axes[0].traj.end_time
+    before = dict(taken)  # (the first move's end was taken the fast way)
+    twin.inject_slip("X", 40.0, end - 1e-9)
+    while (d := twin.next_deadline()) is not None:
+        twin.advance(d)
+    assert taken["ends"] == before["ends"] == 1
+    assert any(isinstance(o, SlipEvent) for o in twin.fast.take_output())
 
 
 @pytest.mark.parametrize("shape", [RampShape(), RampShape(RampKind.PARABOLIC, 5)])
