@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from omsd.engine.axis import Axis
 from omsd.engine.axis_state import steps
 from omsd.engine.core import Core
-from omsd.engine.executor import OpFunction
+from omsd.engine.executor import WAIT_SLACK, OpFunction
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.queue import Op
 from omsd.engine.ramps import kept_course
@@ -36,6 +36,7 @@ from omsd.engine.trajectory import Course, Trajectory
 MOVE_TO = frozenset({"MA", "MT"})
 MOVE_BY = frozenset({"MR", "ML"})
 _MOVE = Motion.MOVE
+_IDLE = Motion.IDLE
 
 
 def own_move_codes(ops: Mapping[str, OpFunction]) -> frozenset[str]:
@@ -76,17 +77,21 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
 
     Why together, and only so: between an axis's end and its queue's step the straightforward
     way runs the reactions of the axes after it and the steps of the axes before it; here each
-    of them is another such end or follow-on, which touches its own axis alone (an axis with
-    nothing due takes no step forward either: what would let its queue go on is an event), so
-    their order changes nothing. The at-rest trajectory ``on_end`` gives the axis, which its next
-    move replaces on the same tick, is not made; what stays of the end is its position and the
-    held position it sets (``hold_goal``)."""
+    of them is another such end or follow-on, which touches its own axis alone, so their order
+    changes nothing. That needs every axis with nothing due to take no step at ``t`` either
+    (:func:`_stands_still`): a queued op of one could change another axis (``CN`` every axis's
+    ramp, ``VS`` the Y axis's motion), before its next move in the straightforward way and
+    after it here. The at-rest trajectory ``on_end`` gives the axis, which its next move
+    replaces on the same tick, is not made; what stays of the end is its position and the held
+    position it sets (``hold_goal``)."""
     tick = machine.clock.at_or_after(t)
     moves: list[tuple[Axis, float, _Move]] = []
     for axis in machine.axes:
         event = axis.event
         when = axis.next_event_time() if event is None else event[0]
         if when is None or when > t:
+            if not _stands_still(axis, t):
+                return False
             continue
         if not _ends_plainly(axis, t):
             return False
@@ -102,6 +107,25 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
         axis.hold_goal = axis.track_enc + axis.ratio * (x - axis.track_counter)  # (on_end)
         _start(machine, axis, tick, move, True)
     return True
+
+
+def _stands_still(axis: Axis, t: float) -> bool:
+    """``axis``, with nothing due at ``t``, takes no step in a settle at ``t``: its queue is
+    empty with nothing to wait for, or it waits for its motion to end while it moves, or for a
+    time that is not over at ``t`` (``Executor``'s ``WAIT_SLACK`` before its end counts as over,
+    though the wait's deadline is not yet due). Anything else (a wait for an input, which a
+    rewiring or a load of the flash may release with no event, for a group, for in position,
+    or queued commands with no wait) may step."""
+    wait = axis.wait
+    if wait is None:
+        queue = axis.queue
+        return queue.pc >= len(queue.program)
+    kind = wait.kind
+    if kind == "motion":
+        return axis.motion is not _IDLE
+    if kind == "time":
+        return wait.until is None or t < wait.until - WAIT_SLACK
+    return False
 
 
 def _ends_plainly(axis: Axis, t: float) -> bool:

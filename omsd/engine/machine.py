@@ -222,6 +222,7 @@ class Machine(Core):
             self.deadline_stale = True
         # fast path: moves that end, each with the next in its queue (omsd.engine.follow_on)
         if self.fast_paths and ends_that_follow_on(self, self._follow_on_codes, t):
+            self.talker = 0
             return
         ex = self.executor
         for axis in self.axes:

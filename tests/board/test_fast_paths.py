@@ -667,6 +667,32 @@ def test_a_move_ending_with_a_look_due_then_is_ended_the_straightforward_way(
     assert any(isinstance(o, SlipEvent) for o in twin.fast.take_output())
 
 
+def test_an_axis_that_steps_with_nothing_due_keeps_the_instant_in_order(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Found by review: an axis with nothing due may still step in the settle of a move's end,
+    and its queued command may change the axis that follows on (``CN``: every axis's ramp;
+    ``VS``: the Y axis's motion). Before its next move in the straightforward way: so the
+    instant's ends are not taken the fast way then. X waits for an input that a rewiring, with
+    no event, releases; or X's time wait ends a hair (within ``WAIT_SLACK``) after Y's end."""
+    taken = started(monkeypatch)
+    twin = Twin(get_model("PC48-4"))
+    twin.wire_input_to_aux(0, "Z")
+    twin.receive(b"AZ;AF;AX;SW0;CN;AY;VL5000;AC50000;MR3000;GO;MR-100;GO;", 0.0, 1)
+    assert twin.fast.axes[0].wait is not None and twin.fast.axes[0].wait.kind == "input"
+    twin.wire_input_to_aux(0, None)
+    while (d := twin.next_deadline()) is not None:
+        twin.advance(d)
+    assert taken["ends"] == 0 and taken["settle"] == 1
+
+    twin = Twin(get_model("PC48-4"))
+    twin.receive(b"AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;", 0.0, 1)
+    end = twin.fast.clock.at_or_after(twin.fast.axes[1].traj.end_time)
+    twin.receive(b"AX;WT125;VS100,50,70;", end - 0.125 + 5e-13, 1)
+    while (d := twin.next_deadline()) is not None and d < 10.0:
+        twin.advance(d)
+
+
 @pytest.mark.parametrize("shape", [RampShape(), RampShape(RampKind.PARABOLIC, 5)])
 @settings(max_examples=200, deadline=None)
 @given(
