@@ -10,10 +10,13 @@ wait is over, the move command leaves a :class:`~omsd.engine.states.Pending`, ``
 later than now, a geared axis, an aux output, an armed interrupt, a servo loop). In a board
 polled while it runs such queues, that was half of what a poll cost.
 
-:func:`follow_on` does the same in one place, for the one case where none of that generality
-applies, and leaves the axis, its queue and the machine as the straightforward way leaves them;
-anywhere else it does nothing and says so, and the straightforward way runs.
-``tests/board/test_fast_paths.py`` runs it against the board without fast paths.
+:func:`follow_on` does the same in one place, in the settle, for the one case where none of
+that generality applies, and leaves the axis, its queue and the machine as the straightforward
+way leaves them; anywhere else it does nothing and says so, and the straightforward way runs.
+:func:`ends_that_follow_on` goes one step further, before an instant's reactions: when
+everything due then is such a move's end, it ends each and starts its next move at once,
+without the at-rest trajectory ``reactions.on_end`` would give the axis for no time at all.
+``tests/board/test_fast_paths.py`` runs both against the board without fast paths.
 """
 
 from __future__ import annotations
@@ -27,21 +30,22 @@ from omsd.engine.core import Core
 from omsd.engine.executor import WAIT_SLACK, OpFunction
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.queue import Op
+from omsd.engine.quiet import MOVE_BY, MOVE_TO
 from omsd.engine.ramps import kept_course
 from omsd.engine.sensing import first_look_needed
 from omsd.engine.states import Motion, Wait
 from omsd.engine.trajectory import Course, Trajectory
 
-#: The move commands a move may follow on with: to a position, by a distance.
-MOVE_TO = frozenset({"MA", "MT"})
-MOVE_BY = frozenset({"MR", "ML"})
 _MOVE = Motion.MOVE
 _IDLE = Motion.IDLE
 
 
 def own_move_codes(ops: Mapping[str, OpFunction]) -> frozenset[str]:
-    """The move commands of :data:`MOVE_TO` and :data:`MOVE_BY` that run the engine's own code
-    in the op table ``ops``, none if ``GO`` does not (a dialect's replacement is its own)."""
+    """The move commands (``quiet``'s :data:`~omsd.engine.quiet.MOVE_TO` and
+    :data:`~omsd.engine.quiet.MOVE_BY`) that run the engine's own code in the op table ``ops``,
+    none if ``GO`` does not (a dialect's replacement is its own). ``ML`` and ``MT`` are among
+    them but never follow on: they always move in a group (linear interpolation), which
+    :func:`_next_move` leaves to the straightforward way."""
     if ops.get("GO") is not MOTION_OPS["GO"]:
         return frozenset()
     return frozenset(code for code in MOVE_TO | MOVE_BY if ops.get(code) is MOTION_OPS[code])
@@ -61,10 +65,10 @@ def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> boo
     group, no output, no input; so a settle that saw nothing else progress need not go round
     again for it (:meth:`~omsd.engine.machine.Machine.settle`)."""
     tick = machine.clock.at_or_after(t)
-    move = _next_move(machine, axis, codes, tick, axis.traj.position(tick))
-    if move is None:
+    start = _next_move(machine, axis, codes, tick, axis.traj.position(tick))
+    if start is None:
         return False
-    _start(machine, axis, tick, move, machine.after_events)
+    _start(machine, axis, tick, start, machine.after_events)
     return True
 
 
@@ -85,7 +89,7 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
     replaces on the same tick, is not made; what stays of the end is its position and the held
     position it sets (``hold_goal``)."""
     tick = machine.clock.at_or_after(t)
-    moves: list[tuple[Axis, float, _Move]] = []
+    starts: list[tuple[Axis, float, _Start]] = []
     for axis in machine.axes:
         event = axis.event
         when = axis.next_event_time() if event is None else event[0]
@@ -97,15 +101,17 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
             return False
         traj = axis.traj
         x = float(steps(traj.position(t), traj.x0))  # (Axis.settle: on a whole step)
-        move = _next_move(machine, axis, codes, tick, x)
-        if move is None:
+        start = _next_move(machine, axis, codes, tick, x)
+        if start is None:
             return False
-        moves.append((axis, x, move))
-    if not moves:
+        starts.append((axis, x, start))
+    if not starts:
         return False
-    for axis, x, move in moves:
+    for axis, x, start in starts:
         axis.hold_goal = axis.track_enc + axis.ratio * (x - axis.track_counter)  # (on_end)
-        _start(machine, axis, tick, move, True)
+        # (after_events: the straightforward way starts the move in the settle that follows
+        # the instant's reactions, which Machine.advance runs with after_events set)
+        _start(machine, axis, tick, start, True)
     return True
 
 
@@ -113,9 +119,10 @@ def _stands_still(axis: Axis, t: float) -> bool:
     """``axis``, with nothing due at ``t``, takes no step in a settle at ``t``: its queue is
     empty with nothing to wait for, or it waits for its motion to end while it moves, or for a
     time that is not over at ``t`` (``Executor``'s ``WAIT_SLACK`` before its end counts as over,
-    though the wait's deadline is not yet due). Anything else (a wait for an input, which a
-    rewiring or a load of the flash may release with no event, for a group, for in position,
-    or queued commands with no wait) may step."""
+    though the wait's deadline is not yet due), or that never will be (``until`` cleared by
+    ``Machine._handle_due`` when its step found it not over). Anything else (a wait for an
+    input, which a rewiring or a load of the flash may release with no event, for a group, for
+    in position, or queued commands with no wait) may step."""
     wait = axis.wait
     if wait is None:
         queue = axis.queue
@@ -147,14 +154,14 @@ def _ends_plainly(axis: Axis, t: float) -> bool:
     )
 
 
-#: What :func:`_next_move` finds: the move's ``GO``, where it starts, its target, its distance
-#: and its course.
-_Move = tuple[Op, float, float, float, Course]
+#: What :func:`_next_move` finds: the ``GO`` that starts the move, where it starts, its target,
+#: its distance and its course.
+_Start = tuple[Op, float, float, float, Course]
 
 
 def _next_move(
     machine: Core, axis: Axis, codes: frozenset[str], tick: float, x: float
-) -> _Move | None:
+) -> _Start | None:
     """The move the axis's queue starts next, on ``tick`` from ``x``, if it follows on (see
     :func:`follow_on`); ``None`` if not. Changes nothing."""
     wait = axis.wait
@@ -169,12 +176,12 @@ def _next_move(
         or tick > machine.now
     ):
         return None
-    move, go = program[pc + 1], program[pc + 2]
-    code = move.code
+    command, go = program[pc + 1], program[pc + 2]
+    code = command.code
     if (
         code not in codes
         or go.code != "GO"
-        or move.group is not None
+        or command.group is not None
         or go.group is not None
         or axis.gear is not None
         or axis.servo is not None
@@ -188,7 +195,7 @@ def _next_move(
         if gear is not None and gear.master == index:
             return None
     # Executor.start_pending's arithmetic: the target, from where the axis stands on the tick
-    value = axis.to_motor(move.args[0])
+    value = axis.to_motor(command.args[0])
     target = float(math.trunc(value)) if code in MOVE_TO else x + math.trunc(value)
     distance = target - x
     course = kept_course(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
@@ -197,11 +204,11 @@ def _next_move(
     return go, x, target, distance, course
 
 
-def _start(machine: Core, axis: Axis, tick: float, move: _Move, after_events: bool) -> None:
+def _start(machine: Core, axis: Axis, tick: float, start: _Start, after_events: bool) -> None:
     """The held command's wait is over, the move command and ``GO`` are passed, and ``GO``
     starts the move (its sender's doing), as ``Executor.start_pending`` and ``Axis.begin`` from
     rest on ``tick`` (``now``: nothing before it to keep) would."""
-    go, x, target, distance, course = move
+    go, x, target, distance, course = start
     queue = axis.queue
     queue.advance()
     queue.advance()

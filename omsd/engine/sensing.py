@@ -60,17 +60,18 @@ def next_event(axis: AxisState) -> tuple[float, str]:
 
 def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
     """Fast path (issue 16): whether the look at the sensors on the first tick ``t`` of a move
-    can find anything. ``Axis.begin`` asks only for a move begun from rest on the instant
-    ``Machine.advance`` is settling (``t`` is now: a move queued behind another, begun on the
-    tick that one ends), whose look the reference would take in that same advance, right after
-    the settle; the move's ``GO`` holds the queue until it ends, and the axis stands on a whole
-    step, so nothing on that instant can move its carriage before the look. The look cannot
-    find anything for a plain move (:func:`looks_at_nothing_else`) whose carriage is strictly
-    between its limit switches (:func:`switches_clear`): no limit is active at ``t``, and a
-    switch reached later is found by the search for crossings (:func:`_next_crossing`) on the
-    tick it is reached. Left out there, the look's event and the settle after it are saved: a
-    queued move costs one event, its end. ``tests/board/test_fast_paths.py`` runs it against
-    the board that looks every time."""
+    can find anything. ``Axis.begin`` (and ``omsd.engine.follow_on``, which starts such moves
+    its own way) asks only for a move begun from rest on the instant ``Machine.advance`` is
+    settling (``t`` is now: a move queued behind another, begun on the tick that one ends),
+    whose look the reference would take in that same advance, right after the settle; the
+    move's ``GO`` holds the queue until it ends, and the axis stands on a whole step, so nothing
+    on that instant can move its carriage before the look. The look cannot find anything for a
+    plain move (:func:`looks_at_nothing_else`) whose carriage is strictly between its limit
+    switches (:func:`switches_clear`): no limit is active at ``t``, and a switch reached later
+    is found by the search for crossings (:func:`_next_crossing`) on the tick it is reached.
+    Left out there, the look's event and the settle after it are saved: a queued move costs one
+    event, its end. ``tests/board/test_fast_paths.py`` runs it against the board that looks
+    every time."""
     if motion is not Motion.MOVE or not looks_at_nothing_else(axis):
         return True
     p = axis.carriage(t)

@@ -578,11 +578,11 @@ def test_a_queued_move_follows_on_as_the_straightforward_board_does(
     taken = started(monkeypatch)
     twin = Twin(get_model(model), world={"X": AxisWorld(positive_limit=3000.0)})
     twin.receive(queue.encode(), 0.0, 1)
-    now, ends = 0.0, 0
-    while (d := twin.next_deadline()) is not None and ends < 40:
+    now, deadlines = 0.0, 0
+    while (d := twin.next_deadline()) is not None and deadlines < 40:
         twin.advance(now := d)
         twin.receive(b"RP;", now + 0.01, 1)
-        ends += 1
+        deadlines += 1
     assert all(axis.queue.empty for axis in twin.fast.axes)
     assert sum(taken.values()) == follow
 
@@ -590,16 +590,22 @@ def test_a_queued_move_follows_on_as_the_straightforward_board_does(
 def test_a_move_that_cannot_follow_on_goes_the_straightforward_way(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """A move by nothing, a move in a group (AA), a servo axis's move: refused, and the twins
-    still agree."""
+    """A move by nothing, a move in a group (AA), a move with the aux output to set (PA), a
+    servo axis's move: refused (the servo's refusal is caution, seen by the count alone), and
+    the twins still agree."""
     taken = started(monkeypatch)
     twin = Twin(get_model("PC48-8"))
     twin.receive(b"AX;VL5000;AC50000;MR300;GO;MR0;GO;AA;MR10,10;GO;MR-10,-10;GO;", 0.0, 1)
     now = 0.0
     while (d := twin.next_deadline()) is not None:
         twin.advance(now := d)
+    aux = Twin(get_model("PC48-8"))
+    aux.receive(b"AX;PA1;VL5000;AC50000;MR300;GO;MR-300;GO;", 0.0, 1)
+    while (d := aux.next_deadline()) is not None:
+        aux.advance(d)
     servo = Twin(get_model("PCIX-400"))
     servo.receive(b"AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;", 0.0, 1)
+    now = 0.0
     while (d := servo.next_deadline()) is not None and now < 5.0:
         servo.advance(now := d)
     assert not any(taken.values())
@@ -609,9 +615,9 @@ def test_moves_that_end_together_follow_on_together_or_the_straightforward_way(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Two axes whose moves end on the same tick: both follow on at the instant's ends; with a
-    third whose queue then says something (``ID``), or with a look at the sensors due then
-    too, nothing takes that way (the reactions run in order), and the settle starts the moves
-    that follow on. The twins agree after every step."""
+    third whose queue then says something (``ID``), nothing takes that way (the reactions run
+    in order), and the settle starts the moves that follow on. The twins agree after every
+    step."""
     for queue, ends in (
         ("AA;VL5000,5000;AC50000,50000;AX;MR300;GO;MR-300;GO;AY;MR300;GO;MR7;GO;", 2),
         (
@@ -663,7 +669,7 @@ def test_a_move_ending_with_a_look_due_then_is_ended_the_straightforward_way(
     twin.inject_slip("X", 40.0, end - 1e-9)
     while (d := twin.next_deadline()) is not None:
         twin.advance(d)
-    assert taken["ends"] == before["ends"] == 1
+    assert taken["ends"] == before["ends"] == 1 and taken["settle"] == before["settle"] + 1
     assert any(isinstance(o, SlipEvent) for o in twin.fast.take_output())
 
 
@@ -685,12 +691,14 @@ def test_an_axis_that_steps_with_nothing_due_keeps_the_instant_in_order(
         twin.advance(d)
     assert taken["ends"] == 0 and taken["settle"] == 1
 
+    taken = started(monkeypatch)
     twin = Twin(get_model("PC48-4"))
     twin.receive(b"AY;VL5000;AC50000;MR3000;GO;MR-3000;GO;", 0.0, 1)
     end = twin.fast.clock.at_or_after(twin.fast.axes[1].traj.end_time)
     twin.receive(b"AX;WT125;VS100,50,70;", end - 0.125 + 5e-13, 1)
     while (d := twin.next_deadline()) is not None and d < 10.0:
         twin.advance(d)
+    assert taken["ends"] == 0
 
 
 @pytest.mark.parametrize("shape", [RampShape(), RampShape(RampKind.PARABOLIC, 5)])
