@@ -72,7 +72,7 @@ class Executor:
                 held = q.current
                 if held is not None:
                     machine.talker = axis.source = held.source
-                if not self._satisfied(axis, w, t):
+                if not self.satisfied(axis, w, t):
                     return progressed
                 axis.wait = None
                 axis.invalidate()
@@ -112,7 +112,8 @@ class Executor:
                 q.advance()
         return progressed
 
-    def _satisfied(self, axis: Axis, w: Wait, t: float) -> bool:
+    def satisfied(self, axis: Axis, w: Wait, t: float) -> bool:
+        """The wait ``w`` of the axis's queue is over at ``t`` (and its step goes on)."""
         if w.kind == "motion":
             return axis.motion is _IDLE
         if w.kind == "time":

@@ -17,44 +17,38 @@ way leaves them; anywhere else it does nothing and says so, and the straightforw
 everything due then is such a move's end, it ends each and starts its next move at once,
 without the at-rest trajectory ``reactions.on_end`` would give the axis for no time at all.
 ``tests/board/test_fast_paths.py`` runs both against the board without fast paths.
+
+The move commands are those of ``quiet``'s :data:`~omsd.engine.quiet.MOVE_TO` and
+:data:`~omsd.engine.quiet.MOVE_BY` that run the engine's own code on the board (the machine
+gives them, ``codes``; none if its ``GO`` is a dialect's own). ``ML`` and ``MT`` are among them
+but never follow on: they always move in a group (linear interpolation), which
+:func:`_next_move` leaves to the straightforward way.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Collection
 
 from omsd.engine.axis import Axis
 from omsd.engine.axis_state import steps
 from omsd.engine.core import Core
-from omsd.engine.executor import WAIT_SLACK, OpFunction
-from omsd.engine.ops_motion import MOTION_OPS
+from omsd.engine.executor import Executor
+from omsd.engine.gearing import followed
 from omsd.engine.queue import Op
-from omsd.engine.quiet import MOVE_BY, MOVE_TO
+from omsd.engine.quiet import MOVE_TO
 from omsd.engine.ramps import kept_course
 from omsd.engine.sensing import first_look_needed
 from omsd.engine.states import Motion, Wait
 from omsd.engine.trajectory import Course, Trajectory
 
 _MOVE = Motion.MOVE
-_IDLE = Motion.IDLE
 
 
-def own_move_codes(ops: Mapping[str, OpFunction]) -> frozenset[str]:
-    """The move commands (``quiet``'s :data:`~omsd.engine.quiet.MOVE_TO` and
-    :data:`~omsd.engine.quiet.MOVE_BY`) that run the engine's own code in the op table ``ops``,
-    none if ``GO`` does not (a dialect's replacement is its own). ``ML`` and ``MT`` are among
-    them but never follow on: they always move in a group (linear interpolation), which
-    :func:`_next_move` leaves to the straightforward way."""
-    if ops.get("GO") is not MOTION_OPS["GO"]:
-        return frozenset()
-    return frozenset(code for code in MOVE_TO | MOVE_BY if ops.get(code) is MOTION_OPS[code])
-
-
-def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> bool:
+def follow_on(machine: Core, axis: Axis, codes: Collection[str], t: float) -> bool:
     """At ``t``, in a settle, ``axis`` is at rest and its queue waits for its motion to end (a
-    ``Wait`` of kind ``"motion"``): if the next commands are a move (``codes``:
-    :func:`own_move_codes`) and ``GO``, neither in a group with other axes, start that move as
+    ``Wait`` of kind ``"motion"``): if the next commands are a move (``codes``, see the module
+    text) and ``GO``, neither in a group with other axes, start that move as
     ``Executor.step`` would and return True; otherwise change nothing and return False.
 
     Left to the straightforward way: a wait with something to run or a jump at its end, a
@@ -72,7 +66,7 @@ def follow_on(machine: Core, axis: Axis, codes: frozenset[str], t: float) -> boo
     return True
 
 
-def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
+def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
     """At ``t``, in ``Machine.advance``, before the reactions to what is due: if everything due
     is the end of a move (:func:`_ends_plainly`) on an axis whose queue then follows on with the
     next (:func:`follow_on`'s conditions), end each and start its next move, leaving every axis
@@ -83,18 +77,25 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
     way runs the reactions of the axes after it and the steps of the axes before it; here each
     of them is another such end or follow-on, which touches its own axis alone, so their order
     changes nothing. That needs every axis with nothing due to take no step at ``t`` either
-    (:func:`_stands_still`): a queued op of one could change another axis (``CN`` every axis's
-    ramp, ``VS`` the Y axis's motion), before its next move in the straightforward way and
-    after it here. The at-rest trajectory ``on_end`` gives the axis, which its next move
-    replaces on the same tick, is not made; what stays of the end is its position and the held
-    position it sets (``hold_goal``)."""
+    (its wait not over, ``Executor.satisfied``): a queued op of one could change another axis
+    (``CN`` every axis's ramp, ``VS`` the Y axis's motion), before its next move in the
+    straightforward way and after it here. The at-rest trajectory ``on_end`` gives the axis,
+    which its next move replaces on the same tick, is not made; what stays of the end is its
+    position and the held position it sets (``hold_goal``)."""
+    machine = ex.machine
     tick = machine.clock.at_or_after(t)
     starts: list[tuple[Axis, float, _Start]] = []
     for axis in machine.axes:
         event = axis.event
         when = axis.next_event_time() if event is None else event[0]
         if when is None or when > t:
-            if not _stands_still(axis, t):
+            # nothing due: it must take no step in the settle at t either (a time wait is over
+            # WAIT_SLACK before its deadline; an input wait may be released by a rewiring)
+            wait = axis.wait
+            if wait is None:
+                if axis.queue.pc < len(axis.queue.program):
+                    return False
+            elif ex.satisfied(axis, wait, t):
                 return False
             continue
         if not _ends_plainly(axis, t):
@@ -115,38 +116,16 @@ def ends_that_follow_on(machine: Core, codes: frozenset[str], t: float) -> bool:
     return True
 
 
-def _stands_still(axis: Axis, t: float) -> bool:
-    """``axis``, with nothing due at ``t``, takes no step in a settle at ``t``: its queue is
-    empty with nothing to wait for, or it waits for its motion to end while it moves, or for a
-    time that is not over at ``t`` (``Executor``'s ``WAIT_SLACK`` before its end counts as over,
-    though the wait's deadline is not yet due), or that never will be (``until`` cleared by
-    ``Machine._handle_due`` when its step found it not over). Anything else (a wait for an
-    input, which a rewiring or a load of the flash may release with no event, for a group, for
-    in position, or queued commands with no wait) may step."""
-    wait = axis.wait
-    if wait is None:
-        queue = axis.queue
-        return queue.pc >= len(queue.program)
-    kind = wait.kind
-    if kind == "motion":
-        return axis.motion is not _IDLE
-    if kind == "time":
-        return wait.until is None or t < wait.until - WAIT_SLACK
-    return False
-
-
 def _ends_plainly(axis: Axis, t: float) -> bool:
     """What is due for ``axis`` at ``t`` is the end of a move, and ``reactions.on_end`` would
     leave it at rest with nothing more due at ``t`` and nothing to do but note where it is: no
-    hold (``Executor.check_hold``), no aux output, no servo loop, no look at the sensors, no
-    armed interrupt, no timer and no scheduled output."""
+    hold (``Executor.check_hold``), no look at the sensors, no armed interrupt, no timer and no
+    scheduled output (no aux output or servo loop either: :func:`_next_move` asks)."""
     return (
         axis.event is not None
         and axis.event[1] == "end"
         and axis.motion is _MOVE
         and not axis.hold
-        and axis.servo is None
-        and axis.pa is None
         and axis.sensor_check is None
         and axis.in_fire is None
         and axis.aux_timer is None
@@ -160,7 +139,7 @@ _Start = tuple[Op, float, float, float, Course]
 
 
 def _next_move(
-    machine: Core, axis: Axis, codes: frozenset[str], tick: float, x: float
+    machine: Core, axis: Axis, codes: Collection[str], tick: float, x: float
 ) -> _Start | None:
     """The move the axis's queue starts next, on ``tick`` from ``x``, if it follows on (see
     :func:`follow_on`); ``None`` if not. Changes nothing."""
@@ -187,13 +166,9 @@ def _next_move(
         or axis.servo is not None
         or axis.pa is not None
         or axis.in_arm is not None
+        or followed(axis)  # (gearing.moved would have them follow: left to the general way)
     ):
         return None
-    index = axis.index
-    for other in machine.axes:  # (gearing.moved would have it follow: left to the general way)
-        gear = other.gear
-        if gear is not None and gear.master == index:
-            return None
     # Executor.start_pending's arithmetic: the target, from where the axis stands on the tick
     value = axis.to_motor(command.args[0])
     target = float(math.trunc(value)) if code in MOVE_TO else x + math.trunc(value)

@@ -78,6 +78,16 @@ def follow(slave: AxisState, master: AxisState, now: float) -> None:
     moved(slave, now, None, None)
 
 
+def followed(axis: AxisState) -> bool:
+    """Some axis is geared to ``axis`` (``moved`` has it follow)."""
+    index = axis.index
+    for other in axis.host.axes:
+        gear = other.gear
+        if gear is not None and gear.master == index:
+            return True
+    return False
+
+
 def moved(axis: AxisState, now: float, start: float | None, motion: Motion | None) -> None:
     """The axis's trajectory was replaced at ``now`` (new motion beginning at ``start``, or
     rest): remember where a contour's own pieces begin (for retiming it), and let the axes geared

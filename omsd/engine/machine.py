@@ -23,11 +23,11 @@ from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor, OpFunction, SensorHook
 from omsd.engine.extensions import BARE, Framing, Options
-from omsd.engine.follow_on import ends_that_follow_on, follow_on, own_move_codes
+from omsd.engine.follow_on import ends_that_follow_on, follow_on
 from omsd.engine.ops_flow import FLOW_OPS
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.ops_parameters import PARAMETER_OPS
-from omsd.engine.quiet import QUIET_OPS, quiet
+from omsd.engine.quiet import MOVE_BY, MOVE_TO, QUIET_OPS, quiet
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
@@ -37,7 +37,7 @@ _IDLE = Motion.IDLE  # (a global: an Enum member read through its class costs mo
 INF = float("inf")
 
 #: How far before its next deadline a machine counts as at rest (:meth:`Machine.at_rest`): a
-#: timed wait is over from ``until - 1e-12`` (``Executor._satisfied``), so a settle that close to
+#: timed wait is over from ``until - 1e-12`` (``Executor.satisfied``), so a settle that close to
 #: a deadline may already run something.
 AT_REST_MARGIN = 1e-9
 
@@ -70,8 +70,7 @@ class Machine(Core):
         fast_paths: bool = True,
     ) -> None:
         super().__init__(model, now, world, framing, options or Options(), fast_paths)
-        table = {**ENGINE_OPS, **(ops or {})}
-        self.executor = Executor(self, table, sensor_hooks)
+        self.executor = Executor(self, {**ENGINE_OPS, **(ops or {})}, sensor_hooks)
         if sensor_hooks:
             self.plain_sensing = False  # (the PCIx: its hook looks at the home switch each time)
         # the quiet commands (omsd.engine.quiet) that run the engine's own code on this board
@@ -79,8 +78,12 @@ class Machine(Core):
         self._quiet_codes = frozenset(
             code for code in QUIET_OPS if own.get(code, ENGINE_OPS[code]) is ENGINE_OPS[code]
         )
-        # the move commands a queued move may follow on with (omsd.engine.follow_on)
-        self._follow_on_codes = own_move_codes(table)
+        # the move commands a queued move may follow on with (omsd.engine.follow_on): the
+        # engine's own, with its own GO
+        quiet_codes = self._quiet_codes
+        self._follow_on_codes = (
+            quiet_codes & (MOVE_TO | MOVE_BY) if "GO" in quiet_codes else frozenset()
+        )
         self.power_up(now)
 
     # -- power ----------------------------------------------------------------------------------
@@ -221,7 +224,7 @@ class Machine(Core):
             self.init_until = None
             self.deadline_stale = True
         # fast path: moves that end, each with the next in its queue (omsd.engine.follow_on)
-        if self.fast_paths and ends_that_follow_on(self, self._follow_on_codes, t):
+        if self.fast_paths and ends_that_follow_on(self.executor, self._follow_on_codes, t):
             self.talker = 0
             return
         ex = self.executor

@@ -102,8 +102,7 @@ def switches_clear(axis: AxisState, lowest: float, highest: float, margin: float
     w = axis.world
     if w.limit_switches is not _MATCHED:
         return False
-    forced = axis.host.world.forced_limits.get(axis.index)  # (WorldState.forced_limit's pair)
-    if forced is not None and (forced[0] is not None or forced[1] is not None):
+    if axis.host.world.limit_forced(axis.index):
         return False
     return lowest > w.negative_limit + margin and highest < w.positive_limit - margin
 

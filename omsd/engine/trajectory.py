@@ -185,31 +185,51 @@ class Trajectory:
         after included (``-inf``/``inf`` on the side a piece without end heads to). Found once:
         at the ends of each piece and where its velocity changes sign (its turning points), the
         only places a piece's position can be extreme."""
-        if self._extent is None and self._course is not None:
-            self._extent = self._course.extent(self._offsets, self.x0, self.final)
         if self._extent is None:
-            lowest = highest = self.x0
-            for base, piece in zip(self._offsets, self.pieces, strict=True):
-                duration = piece.duration
-                if math.isinf(duration):  # a cruise without end (first_time's own rule)
+            course = self._course
+            points = self._points() if course is None else course.extremes
+            final = self.final if self.pieces and self.is_finite else None
+            lowest, highest = _bounds(self.x0, self._offsets, points, final)
+            for piece in self.pieces:  # a cruise without end (first_time's own rule)
+                if math.isinf(piece.duration):
                     v = piece.v(0.0)
                     if v > 0.0:
                         highest = math.inf
                     elif v < 0.0:
                         lowest = -math.inf
-                    times: Sequence[float] = (0.0,)
-                else:
-                    times = (0.0, duration, *piece.turning_points())
-                for tau in times:
-                    x = base + piece.x(tau)
-                    if x < lowest:
-                        lowest = x
-                    elif x > highest:
-                        highest = x
-            if self.pieces and self.is_finite:
-                lowest, highest = min(lowest, self.final), max(highest, self.final)
             self._extent = (lowest, highest)
         return self._extent
+
+    def _points(self) -> list[tuple[float, ...]]:
+        """Each piece's positions (from its start) where it can be extreme: its ends and its
+        turning points; a piece without end, its start."""
+        points: list[tuple[float, ...]] = []
+        for piece in self.pieces:
+            duration = piece.duration
+            times: Sequence[float] = (
+                (0.0,) if math.isinf(duration) else (0.0, duration, *piece.turning_points())
+            )
+            points.append(tuple(piece.x(tau) for tau in times))
+        return points
+
+
+def _bounds(
+    x0: float, offsets: list[float], points: list[tuple[float, ...]], final: float | None
+) -> tuple[float, float]:
+    """The lowest and the highest of ``x0``, of each piece's ``points`` from where it begins
+    (``offsets``) and of ``final`` (if given): :meth:`Trajectory.extent`'s, with a course or
+    without."""
+    lowest = highest = x0
+    for base, xs in zip(offsets, points, strict=True):
+        for point in xs:
+            x = base + point
+            if x < lowest:
+                lowest = x
+            elif x > highest:
+                highest = x
+    if final is not None:
+        lowest, highest = min(lowest, final), max(highest, final)
+    return lowest, highest
 
 
 class Course:
@@ -241,21 +261,6 @@ class Course:
         self.steps = steps
         self.extremes = extremes
         self.duration = t
-
-    def extent(self, offsets: list[float], x0: float, final: float) -> tuple[float, float]:
-        """:meth:`Trajectory.extent` of this course started at ``x0`` (``offsets``: where each
-        piece begins) and ending at ``final``."""
-        lowest = highest = x0
-        for base, points in zip(offsets, self.extremes, strict=True):
-            for point in points:
-                x = base + point
-                if x < lowest:
-                    lowest = x
-                elif x > highest:
-                    highest = x
-        if self.pieces:
-            lowest, highest = min(lowest, final), max(highest, final)
-        return lowest, highest
 
 
 def segment(traj: Trajectory, a: float, b: float) -> list[Piece]:

@@ -102,6 +102,11 @@ class WorldState:
             return None
         return pair[1 if direction > 0 else 0]
 
+    def limit_forced(self, axis: int) -> bool:
+        """Either of the axis's limit switches is forced."""
+        pair = self.forced_limits.get(axis)
+        return pair is not None and (pair[0] is not None or pair[1] is not None)
+
     def force_limit(self, axis: int, direction: int, state: bool | None) -> None:
         pair = self.forced_limits.setdefault(axis, [None, None])
         pair[1 if direction > 0 else 0] = state

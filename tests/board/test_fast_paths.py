@@ -538,10 +538,11 @@ def started(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
     taken = {"ends": 0, "settle": 0}
     ends, settle = follow_on.ends_that_follow_on, follow_on.follow_on
 
-    def counted_ends(machine: Any, codes: Any, t: float) -> bool:
-        before = [axis.traj for axis in machine.axes]
-        result = ends(machine, codes, t)
-        taken["ends"] += sum(a.traj is not b for a, b in zip(machine.axes, before, strict=True))
+    def counted_ends(ex: Any, codes: Any, t: float) -> bool:
+        axes = ex.machine.axes
+        before = [axis.traj for axis in axes]
+        result = ends(ex, codes, t)
+        taken["ends"] += sum(a.traj is not b for a, b in zip(axes, before, strict=True))
         return result
 
     def counted_settle(*args: Any) -> bool:
