@@ -6,7 +6,8 @@ counts them with valgrind (``callgrind``): one board of the load of :mod:`bench.
 process's interpreter, polled with ``QA RP`` every 0.1 s as the daemon runs it, once for
 ``SHORT`` and once for ``LONG`` seconds on its manual clock; the difference over the difference
 in polls is the instructions of one poll, without the start-up and the setup. Hash seeds are
-fixed (``PYTHONHASHSEED=0``): two runs of the same tree agree to a few instructions.
+fixed (``PYTHONHASHSEED=0``), but objects hashed by their address (the engine's enums) are not:
+two runs of the same tree differ by a few hundred instructions (a thousandth).
 
 Variants: the load itself (``load``: 4 axes jogging, 4 running queues of moves), the same board
 ``at rest`` and with the ``jogs alone``. A developer's tool, not a row of the table: it needs

@@ -31,6 +31,7 @@ from omsd.dialects.interpreter import Blocked, CommandFailed, Interpreter
 from omsd.engine.axis import Axis
 from omsd.engine.events import Reply
 from omsd.engine.machine import Machine
+from omsd.engine.registers import CMD_S
 from omsd.engine.states import Motion
 from omsd.engine.world import AxisWorld
 from omsd.models.spec import Model
@@ -42,7 +43,12 @@ from omsd.protocol.operands import OperandError
 SCANS_KEPT = 64
 
 CONTROL_D = 0x04
+CONTROL_X = 0x18
 CONTROL_Y = 0x19
+#: The control characters that bypass the interpreter (kill, clear flags), and on a board whose
+#: Control-X clears the command error flag (``Model.control_x``).
+CONTROLS = (CONTROL_D, CONTROL_Y)
+CONTROLS_X = (CONTROL_D, CONTROL_Y, CONTROL_X)
 
 
 class Board(Machine):
@@ -104,7 +110,8 @@ class Board(Machine):
         """Bytes from the host. Returns how many were taken: a full input buffer (124
         characters on a PC48, while the interpreter is held by a full queue or WQ) takes no more,
         as the host would see TBE_S low; the caller keeps the rest and offers it again later.
-        Control-D (kill) and Control-Y (clear flags) bypass the interpreter.
+        Control-D (kill) and Control-Y (clear flags) bypass the interpreter, and on a VS4
+        Control-X (clear the command error flag, ``Model.control_x``).
 
         ``source`` names the session the bytes come from (0: the only one). The input buffer
         holds one session's characters at a time: another session's bytes are not taken (0)
@@ -139,16 +146,19 @@ class Board(Machine):
         self.talker = source
         taken = 0
         n = len(data)
+        controls = CONTROLS_X if self.model.control_x else CONTROLS
         while taken < n:
             b = data[taken]
-            if b in (CONTROL_D, CONTROL_Y):
+            if b in controls:
                 interp.pump(now)
                 if not interp.room():
                     break
                 if b == CONTROL_D:
                     interp.control_d(now)
-                else:
+                elif b == CONTROL_Y:
                     interp.clear_flags()
+                else:
+                    self.registers.status &= ~CMD_S  # Control-X: "clears command errors only"
                 taken += 1
                 continue
             room = interp.capacity - len(buffer)
@@ -160,7 +170,7 @@ class Board(Machine):
                     break
             # as many characters as there is room for, up to the next control character
             chunk = data[taken : taken + room]
-            for control in (CONTROL_D, CONTROL_Y):
+            for control in controls:
                 cut = chunk.find(control)
                 if cut >= 0:
                     chunk = chunk[:cut]

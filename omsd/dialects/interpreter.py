@@ -327,7 +327,7 @@ class Interpreter(Operands, LoopStacks):
             if self.mode == "single" and self.contour is None:
                 if not self.axis.has_encoder:
                     raise CommandFailed(ErrorKind.NO_ENCODER)
-            elif not model.encoder_option:
+            elif not model.encoder_option and not spec.encoder_only_single:
                 raise CommandFailed(ErrorKind.NO_ENCODER)
         if spec.not_on_encoder_models and model.encoder_option:
             raise CommandFailed(ErrorKind.ENCODER_MODEL)

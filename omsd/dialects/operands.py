@@ -81,9 +81,21 @@ class Operands:
         return out
 
     def convert(self, axis: Axis, value: Decimal, kind: str) -> float:
-        """User units (UU) and integer truncation. ``kind``: "dist" (whole counts), "vel" and
-        "acc" (whole unless user units are on), "frac" (fractions kept: JF)."""
+        """User units (UU) and integer truncation. ``kind``: "dist" (whole counts), "steps"
+        (a position or distance the engine takes to motor steps and truncates there: whole
+        counts, but with user units on the fraction is kept), "vel" and "acc" (whole unless
+        user units are on), "frac" (fractions kept: JF).
+
+        "steps" is for an encoder ratio (ER), which the engine applies when the command runs:
+        with user units "All parameters are then input in the user units which have been
+        defined", and "The correct number of motor counts are generated" (PC48 §6.15 ER), the
+        ratio "handled internally in floating point format" (§5.3). So ``ER1000,2000 UU0.5
+        LP601`` is 300.5 encoder counts, 601 motor steps; truncated to whole encoder counts
+        first it was 300 and 600, and every odd step out of reach. Without a ratio the engine's
+        truncation gives what truncating here gave."""
         scaled = value * axis.uu if axis.uu is not None else value
+        if kind == "steps":
+            return float(scaled) if axis.uu is not None else float(truncate(scaled))
         if kind == "dist" or (kind in ("vel", "acc") and axis.uu is None):
             return float(truncate(scaled))
         return float(scaled)

@@ -4,7 +4,8 @@ the command language in front of it.
 The engine knows no command language. A dialect (:mod:`omsd.dialects`) hands a
 :class:`~omsd.engine.machine.Machine` these, through the board that joins them:
 
-* :class:`Framing`: the bytes around a value and a status reply;
+* :class:`Framing`: the bytes around a value and a status reply, and the mark of a command
+  error in the board's own stream;
 * :class:`Options`: behaviour switches where the manuals of two families disagree about a
   general mechanism (soft limits per axis or per board, whether a jog ends slip detection ...);
 * extra executor ops and sensor hooks (:data:`omsd.engine.executor.OpFunction`,
@@ -25,10 +26,12 @@ from omsd.engine.states import Motion
 @dataclass(frozen=True, slots=True)
 class Framing:
     """The bytes before and after a reply's text: ``value`` for a value (a position, an
-    identification), ``status`` for an axis status."""
+    identification), ``status`` for an axis status; ``error``: what a command error puts in
+    the board's own byte stream (the raw link), if anything."""
 
     value: tuple[bytes, bytes]
     status: tuple[bytes, bytes]
+    error: bytes = b""
 
 
 #: No framing at all (a machine without a dialect).

@@ -47,12 +47,13 @@ def _lp(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if axis.has_encoder:
         # "the parameter will be loaded into the encoder position register and the parameter
         # times the encoder ratio will be loaded into the position counter" (ER3,2 LP30000
-        # gives 20,000: the motor/encoder ratio)
-        axis.load_counter(t, axis.to_motor(value))
-        axis.anchor_encoder(t, value)
+        # gives 20,000: the motor/encoder ratio), a whole number of steps (user units may
+        # give a fraction of an encoder count: ER1000,2000 UU0.5 LP601 is 300.5, 601 steps)
+        axis.load_counter(t, float(math.trunc(axis.to_motor(value))))
+        axis.anchor_encoder(t, float(math.trunc(value)))
         ex.hold_off(axis)
     else:
-        axis.load_counter(t, value)
+        axis.load_counter(t, float(math.trunc(value)))
     axis.hold_goal = float(axis.encoder(t))
     return None
 

@@ -289,10 +289,12 @@ def _custom_move(d: float, vmax: float, accel: float, shape: RampShape) -> list[
     """
     up = _custom_ramp(vmax, accel, shape.breakpoints)
     s_up = _distance(up)
+    peak = vmax
     if 2.0 * s_up > d:
         up = _truncated(up, d / 2.0)
         s_up = d / 2.0
-    return _assemble(d, up, s_up, [mirrored(p) for p in reversed(up)], s_up)
+        peak = up[-1].v(up[-1].duration) if up else 0.0  # (no cruise: it is over half-way)
+    return _assemble(d, up, s_up, [mirrored(p) for p in reversed(up)], s_up, peak)
 
 
 def _scurve_move(d: float, vmax: float, accel: float, shape: RampShape) -> list[Piece]:
@@ -307,21 +309,23 @@ def _scurve_move(d: float, vmax: float, accel: float, shape: RampShape) -> list[
     sc = shape.scurve or SCurve()
     up, down = _scurve_sides(vmax, accel, sc)
     s_up, s_down = _distance(up), _distance(down)
+    peak = vmax
     if s_up + s_down > d:
         peak = vmax * math.sqrt(d / (s_up + s_down))
         up, down = _scurve_sides(peak, accel, sc)
         s_up, s_down = _distance(up), _distance(down)
-    return _assemble(d, up, s_up, down, s_down)
+    return _assemble(d, up, s_up, down, s_down, peak)
 
 
 def _assemble(
-    d: float, up: Sequence[Poly], s_up: float, down: Sequence[Poly], s_down: float
+    d: float, up: Sequence[Poly], s_up: float, down: Sequence[Poly], s_down: float, peak: float
 ) -> list[Piece]:
+    """The ramp ``up`` to ``peak``, a cruise at ``peak`` over what is left of ``d``, the ramp
+    ``down``."""
     pieces: list[Piece] = [*up]
-    peak_v = up[-1].v(up[-1].duration) if up else 0.0
     rest = d - s_up - s_down
-    if rest > 1e-9 and peak_v > 0.0:
-        pieces.append(cruise(peak_v, rest / peak_v))
+    if rest > 1e-9 and up and peak > 0.0:
+        pieces.append(cruise(peak, rest / peak))
     pieces.extend(down)
     return pieces
 
@@ -413,11 +417,13 @@ def profile_pieces(
         omega = 2.0 * accel / peak
         up = Cosine(0.0, peak, omega, math.pi / omega)
     down = _ramp_down(up)
-    peak_v = up.v(up.duration)
     pieces: list[Piece] = [up]
     rest = d - 2.0 * s_up
-    if rest > 1e-9 and peak_v > 0.0:
-        pieces.append(cruise(peak_v, rest / peak_v))
+    if rest > 1e-9:
+        # a ramp that leaves room for a cruise has reached VL: the cruise is at VL itself, not
+        # at the ramp's last velocity, which floating point may leave a hair below it
+        # (999.9999999999999 for VL1000 on a parabolic ramp, whose integer part RV gave as 999)
+        pieces.append(cruise(vmax, rest / vmax))
     pieces.append(down)
     return [scaled(p, sign) for p in pieces]
 

@@ -7,6 +7,11 @@ receive ``!``, ``@`` or ``$`` bytes on this link: its parser counts them as head
 eats the first byte of the next reply." Done, limit and slip are therefore reported only as
 events (for the traffic log), never as bytes. With echo on (EN) the ``#`` follows the English
 error message (``XQ<LF><CR>Unrecognized command: XQ<LF><CR>#``), as the driver's does.
+
+What a command error puts in the stream is the dialect's (``Framing.error``): the ``#`` above
+for the PC48 family, nothing for the PCIx, whose manual has a command error set CMD_S in the
+status register and defines no text for it (§3.9), and whose MAX-family clients read each reply
+as ``text<LF><CR>`` with nothing before it. Either way the error is an event in the traffic log.
 """
 
 from __future__ import annotations
@@ -37,10 +42,10 @@ class RawLink:
                 return LinkOutput([(sources[0], item.data)])
         return self.output(out, sources)
 
-    @staticmethod
-    def output(out: list[Output], sources: list[int]) -> LinkOutput:
+    def output(self, out: list[Output], sources: list[int]) -> LinkOutput:
         """The board's output for the host, item by item (what :meth:`to_host` does but for its
         fast path)."""
+        error = self.board.framing.error
         message_first(out, sources)
         pieces: list[tuple[int, bytes]] = []
         events: list[Event] = []
@@ -49,8 +54,8 @@ class RawLink:
                 merge(pieces, source, item.data)
             else:
                 events.append(item)
-                if isinstance(item, CommandErrorEvent):
-                    merge(pieces, source, b"#")
+                if error and isinstance(item, CommandErrorEvent):
+                    merge(pieces, source, error)
         return LinkOutput(pieces, events)
 
     def next_deadline(self) -> float | None:

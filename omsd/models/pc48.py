@@ -153,7 +153,8 @@ PC48_COMMANDS: dict[str, CommandSpec] = {
         _c("HN", False, q(2), NV, **_ENC),
         _c("ES", True, q(2), NV, **_ENC),
         _c("IS", False, q(1), NV, **_ENC),
-        _c("RL", False, IMM, IMM, **_ENC),
+        # (its AA,AM row, "Immediate", spans both columns, as IS's "Not valid" does)
+        _c("RL", False, IMM, IMM, encoder_only=True, encoder_only_single=True),
         _c("ET", False, q(2), NV, **_ENC),
         _c("HE", False, IMM, NV, **_ENC),
         _c("HS", False, IMM, NV, **_ENC),

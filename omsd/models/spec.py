@@ -138,6 +138,9 @@ class CommandSpec:
     optional: bool = False  # the operand may be left out (MA, HM, LP, PA, PN, AN, AF)
     am: Cell | None = None  # where AM differs from AA (WS)
     encoder_only: bool = False  # "AX - AT ... NO ENCODER Not valid"
+    # encoder_only in single-axis mode alone: the AA,AM row's one cell spans both columns (RL:
+    # "AA,AM Immediate" on a board without the encoder option too)
+    encoder_only_single: bool = False
     not_on_encoder_models: bool = False  # MO
     single_axes: str | None = None  # VS: "You must be in the AX mode"
     other_axes_ignored: bool = False  # VS4 VS: "AY - AT Ignored" rather than "Not valid"
@@ -192,6 +195,14 @@ class Model:
     serial: str = ""  # serial number, for a WY that reports one (VS4)
     vector_register: bool = False  # VME: the interrupt vector register (VS4 offset 9)
     irq_status_or: bool = False  # VS4: IRQ_S "is the logical OR of bits 4 through 6"
+    # VS4: Control-X (0x18) clears the command error flag and is no command (EPICS drvOms,
+    # "Verified with firmware ... VS4-040 ver 1.04": "Control-X, clears command errors only",
+    # written by its interrupt routine at every command error; the manual has no word on it)
+    control_x: bool = False
+    # the lowest acceleration a PN ramp ends at, as a share of AC: 0 on the PC48 and PC46 (the
+    # equation of PC48 §1.3 makes PN10 end at 0 %), 0.1 on the VS4, whose manual has only the
+    # words, "down to as low as 10%" ("3 to 10 corresponding to 70% and 10%")
+    parabolic_floor: float = 0.0
     # Reply framing: "surround" = <LF><CR>text<LF><CR> (<LF><CR><CR> for axis status), the
     # PC48/PC46/VS4 card; "trailing" = text<LF><CR>, as the PCIx and its MAX-family descendants
     # present it on a serial or network link (shared/interop/README.md)

@@ -109,6 +109,8 @@ def _vs4(name: str, axes: str) -> Model:
         serial="123456",
         vector_register=True,
         irq_status_or=True,
+        control_x=True,
+        parabolic_floor=0.1,
     )
 
 

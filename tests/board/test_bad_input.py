@@ -238,8 +238,14 @@ def test_encoder_command_on_u_of_pc48_6e_is_one_error(word: str) -> None:
     assert out == b""
 
 
-def test_rl_in_aa_on_open_loop_board_is_one_error() -> None:
-    one_error("PC48-4", "AA", "RL", ErrorKind.NO_ENCODER)
+def test_rl_on_an_open_loop_board_is_one_error_in_single_axis_mode_alone() -> None:
+    """RL's queue table: "AX - AT  Not valid  Immediate", and one cell "Immediate" across both
+    columns for "AA,AM" (as IS's one "Not valid" spans both): without encoders, RL in AA mode
+    answers an N for each axis ("The number of characters returned corresponds to the number of
+    axes available on the board"); until 2026-11-27 it was an error here too."""
+    one_error("PC48-4", "AX", "RL", ErrorKind.NO_ENCODER)
+    h = Harness("PC48-4")
+    assert h.send("AA RL") == b"\n\rNNNN\n\r" and h.errors() == []
 
 
 @pytest.mark.parametrize("word", ["AU", "AV", "AR", "AS"])

@@ -365,7 +365,9 @@ def outcome(model: str, mnemonic: str, mode: str, form: str) -> tuple[bytes, lis
     if spec.cell(mode).kind is Kind.NOT_VALID:
         return b"", [(ErrorKind.NOT_VALID_IN_MODE, text), *stray]
     axis_has_encoder = "X" in board.encoder_axes if mode == "single" else bool(board.encoder_axes)
-    if spec.encoder_only and not axis_has_encoder:
+    # (RL's "AA,AM  Immediate" is one cell across both columns: valid without encoders too)
+    needs_encoder = spec.encoder_only and (mode == "single" or not spec.encoder_only_single)
+    if needs_encoder and not axis_has_encoder:
         # "AX - AT  NO ENCODER  Not valid", "This command is available only in models with the
         # encoder option"
         return b"", [(ErrorKind.NO_ENCODER, text), *stray]

@@ -910,3 +910,42 @@ def test_example_form_aa_uu_sets_user_units_per_axis() -> None:
     pc48.run()
     assert errors(pc48) == [(ErrorKind.NOT_VALID_IN_MODE, "UU10000,10000,10000")]
     assert pc48.query("RP") == frame("1,1,1,1")
+
+
+def test_control_x_clears_the_command_error_flag_and_nothing_else() -> None:
+    """Not in the manual: EPICS' VS4 driver (drvOms, "Verified with firmware ... VS4-040 ver
+    1.04") writes Control-X, "clears command errors only", from its interrupt routine at every
+    command error. On a VS4 it clears CMD_S and is no command (were it an error, that routine
+    would answer it with another Control-X for ever); the done flags stay. The PC48 has no such
+    character: there it is a bad character, as before."""
+    h = Harness("VS4-040")
+    b = h.board
+    h.send("AX MR10 GO ID ZZ")
+    h.run()
+    assert [kind for kind, _ in errors(h)] == [ErrorKind.UNKNOWN_COMMAND]
+    assert b.status_register(h.t) & (CMD_S | DON_S) == CMD_S | DON_S
+    assert h.send("\x18") == b""
+    assert errors(h) == []  # no new error
+    assert b.status_register(h.t) & (CMD_S | DON_S) == DON_S  # the done flag stays
+    assert b.read_done_register(h.t) == 0x01
+    assert h.send("AX RP\x18 RP") == frame("10") * 2  # within a line too, between commands
+    assert errors(h) == []
+    pc48 = Harness("PC48-4E")
+    pc48.send("\x18")
+    assert [kind for kind, _ in errors(pc48)] == [ErrorKind.BAD_CHARACTER]
+
+
+@pytest.mark.parametrize(("mode", "end"), [("PN3", 1_400_000), ("PN9", 200_000), ("PN10", 200_000)])
+def test_a_parabolic_ramp_ends_no_lower_than_ten_percent(mode: str, end: int) -> None:
+    """VS4 PN: "decreases in steps of 10% of the initial acceleration down to as low as 10% ...
+    3 to 10 corresponding to 70% and 10% acceleration at the peak respectively", and its own
+    example is ``PN10;``. The VS4 manual has no ramp equation; the PC48's (§1.3, "10 times the
+    ratio t/T2") makes PN10 end at 0 %, which the PC48 keeps (docs/decisions.md)."""
+    h = Harness("VS4-040")
+    h.send(f"{mode} AX VL100000 MR4000000 GO ")  # AC2000000 (power-up)
+    h.until(1.0)
+    assert h.send("RC") == frame(str(end))
+    pc48 = Harness("PC48-4E")
+    pc48.send(f"{mode} AX VL100000 AC2000000 MR4000000 GO ")
+    pc48.until(1.0)
+    assert pc48.send("RC") == frame(str({"PN3": 1_400_000, "PN9": 200_000}.get(mode, 0)))

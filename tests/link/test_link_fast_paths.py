@@ -441,9 +441,11 @@ def test_the_raw_link_hands_one_reply_on_as_it_is(
         assert len(out.pieces) == 1 and out.pieces[0][0] == 1 and out.events == []
         assert link.to_host(1.0 + i) == LinkOutput()  # nothing: the fast path's too
     assert calls["output"] == 0
-    link.from_host(b"XQ;" if get_model(model).dialect == "pcix" else b"XQ ", 5.0, 1)
+    pcix = get_model(model).dialect == "pcix"
+    link.from_host(b"XQ;RP;" if pcix else b"XQ RP ", 5.0, 1)
     out = link.to_host(5.0)
-    assert b"#" in out.data and len(out.events) == 1
+    # a command error: a lone '#' in the PC48 family's stream, nothing in the PCIx's (CMD_S)
+    assert out.data == (b"0\n\r" if pcix else b"#\n\r0\n\r") and len(out.events) == 1
     assert calls["output"] == 1
 
 
@@ -458,7 +460,8 @@ def test_the_fast_paths_give_what_the_straight_ones_give_for_each_kind_of_output
     assert {"Reply", "DoneEvent", "CommandErrorEvent"} <= kinds, kinds
     for item, source in zip(out, sources, strict=True):
         single: list[Output] = [item]
-        assert RawLink.output(list(single), [source]) == raw_one(item, source)
+        raw = RawLink(Board(get_model("PC48-4E"), now=0.0))
+        assert raw.output(list(single), [source]) == raw_one(item, source)
         for eos in (0x0A, 0x0D):
             fast = DriverLink(Board(get_model("PC48-4E"), now=0.0), eos=eos)
             straight = StraightDriver(Board(get_model("PC48-4E"), now=0.0), eos=eos)

@@ -203,7 +203,10 @@ def test_a_card_whose_clock_jitters_within_the_tolerance_replays(
     session(path, model, link, lambda rng: rng.uniform(0.0, 0.004))
     result = replay_file(path)
     assert result.ok, result.report()
-    assert result.counts.answers == 48 and result.counts.events == (3 if link == "driver" else 0)
+    # (the XQ's command error is an answer, but for the PCIx's raw stream, which has no byte for it)
+    answers = 47 if (link, model) == ("raw", "PCIX-400") else 48
+    assert result.counts.answers == answers
+    assert result.counts.events == (3 if link == "driver" else 0)
 
 
 def test_a_card_late_beyond_the_tolerance_is_reported_at_its_markers(tmp_path: Path) -> None:

@@ -8,9 +8,10 @@ personality, at the volume the issue asks for (10^6 inputs in the long pass), wi
 
 What a link must make of the board's output (the oracle, :meth:`FuzzHost.check_output`):
 
-* the raw link (``omsd/link/raw.py``): the board's own bytes unchanged; "A command error must be
-  visible in the stream as a lone ``#``" and the client "must not receive ``!``, ``@`` or ``$``
-  bytes on this link" (``shared/interop/README.md``, quoted in the module);
+* the raw link (``omsd/link/raw.py``): the board's own bytes unchanged; on the PC48 family "A
+  command error must be visible in the stream as a lone ``#``", on the PCIx a command error
+  sends nothing (it sets CMD_S, PCIx §3.9), and the client "must not receive ``!``, ``@`` or
+  ``$`` bytes on this link" (``shared/interop/README.md``, quoted in the module);
 * the driver link, PC48 manual §7.3.2 and §7.3.3: a reply's "LF and CR's" stripped and the end
   character after it; "When a command error occurs it places a # symbol followed by the 'E:'
   specified end character"; "A limit interrupt causes an @ character followed by the end
@@ -205,10 +206,11 @@ class FuzzHost:
         items = list(items)
         message_first(items, [0] * len(items))
         if self.kind == "raw":
+            error = b"" if self.board.model.dialect == "pcix" else b"#"
             expected = b"".join(
                 i.data
                 if isinstance(i, Reply)
-                else b"#"
+                else error
                 if isinstance(i, CommandErrorEvent)
                 else b""
                 for i in items
@@ -403,7 +405,8 @@ class FuzzHost:
         assert self.pass_on(bad_word(self.model) + b"WY" + end, 1.0)
         self.wait(0.1)
         expected = who_are_you(self.model, self.kind, self.eos)
-        error = ended + b"#" + self.eos
+        raw_error = b"" if self.model.dialect == "pcix" else b"#"  # (PCIx: CMD_S alone)
+        error = ended + (b"#" + self.eos if self.kind == "driver" else raw_error)
         assert bytes(self.received) == error + expected, (
             f"after recovery: {bytes(self.received)!r}, expected {error + expected!r}"
         )

@@ -23,7 +23,9 @@ from omsd.models.spec import CommandSpec, Model
 
 TABLE: dict[str, AnyHandler] = {**HANDLERS, **PC48_HANDLERS}
 
-FRAMING = Framing(value=(b"\n\r", b"\n\r"), status=(b"\n\r\r", b"\n\r\r"))
+#: (a command error is a lone ``#`` in the stream: what EPICS' drvOmsPC68 learns an axis's
+#: missing encoder or servo loop from, ``shared/interop/README.md``)
+FRAMING = Framing(value=(b"\n\r", b"\n\r"), status=(b"\n\r\r", b"\n\r\r"), error=b"#")
 
 OPTIONS = Options(
     slip_tolerance=0.0,

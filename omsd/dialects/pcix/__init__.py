@@ -35,7 +35,10 @@ from omsd.models.spec import CommandSpec, Model
 
 _MODULES = (gearing, motion, ramps, reports, servo, settings, stops)  # each files its handlers
 
-FRAMING = Framing(value=(b"", b"\n\r"), status=(b"", b"\n\r"))
+#: (a command error sends nothing: it sets CMD_S in the status register, PCIx §3.9 "CMD_S Command
+#: error", and the manual defines no text for it; a byte would stick to the front of the next
+#: reply, which a MAX-family client reads as text<LF><CR> with nothing before it)
+FRAMING = Framing(value=(b"", b"\n\r"), status=(b"", b"\n\r"), error=b"")
 
 OPTIONS = Options(
     slip_tolerance=1.0,

@@ -92,7 +92,8 @@ def parabolic_steps(ix: Interpreter, value: Decimal | None, mnemonic: str) -> in
 @handles("PN")
 def _pn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     steps = parabolic_steps(ix, ix.one(cmd, required=False), "PN")
-    ix.machine.ramp = pf.RampShape(pf.RampKind.PARABOLIC, steps)
+    floor = ix.machine.model.parabolic_floor
+    ix.machine.ramp = pf.RampShape(pf.RampKind.PARABOLIC, steps, floor=floor)
 
 
 @handles("PF")

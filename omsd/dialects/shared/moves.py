@@ -3,13 +3,14 @@ homing and the velocity staircase."""
 
 from __future__ import annotations
 
+import math
 from decimal import Decimal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.shared.contour import contour_line
 from omsd.dialects.shared.table import handles
 from omsd.engine import profiles as pf
-from omsd.engine.axis import Motion
+from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.errors import ErrorKind
@@ -49,7 +50,7 @@ def _lp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw_value in items.items():
         axis = ix.machine.axes[index]
-        value = ix.check("LP", ix.convert(axis, raw_value, "dist"))
+        value = _steps(ix, axis, raw_value, "LP")
         ops.append((axis, Op("LP", (value,), ix.cost(cell, axis))))
     ix.enqueue(ops)
 
@@ -57,6 +58,16 @@ def _lp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _check_target(ix: Interpreter, value: float, mnemonic: str, operand: int = 1) -> float:
     """A position or distance in steps against its row (the position range)."""
     return ix.check(mnemonic, value, operand)
+
+
+def _steps(ix: Interpreter, axis: Axis, raw: Decimal, mnemonic: str) -> float:
+    """A position or distance the engine takes to whole motor steps (``Operands.convert``'s
+    "steps": with user units, the fraction is kept for the encoder ratio), checked against its
+    row as the whole number of counts it was always checked as (``UU0.5 LP67108863`` is
+    33,554,431.5 counts, and loads 33,554,431)."""
+    value = ix.convert(axis, raw, "steps")
+    ix.check(mnemonic, float(math.trunc(value)))
+    return value
 
 
 @handles("MA", "MR", "ML", "MT")
@@ -82,7 +93,7 @@ def _move(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw_value in items.items():
         axis = machine.axes[index]
-        value = _check_target(ix, ix.convert(axis, raw_value, "dist"), code)
+        value = _steps(ix, axis, raw_value, code)
         ops.append((axis, Op(code, (value,), ix.cost(cell, axis), group)))
     ix.enqueue(ops)
     if ix.mode != "single":
@@ -212,7 +223,7 @@ def _sp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axis = ix.axis
     raw = ix.one(cmd)
     assert raw is not None
-    p = _check_target(ix, ix.convert(axis, raw, "dist"), cmd.mnemonic)
+    p = _steps(ix, axis, raw, cmd.mnemonic)
     if cmd.mnemonic == "FP":
         # "flush the command queue and attempt to stop at the specified position"
         ix.machine.executor.flush(axis, t)

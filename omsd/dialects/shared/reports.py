@@ -63,18 +63,36 @@ def _rq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("RC")
 def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    _list(ix, lambda a: str(int(_current_acceleration(ix, a, t))), t)
+    _list(ix, lambda a: str(whole(_current_acceleration(ix, a, t))), t)
+
+
+def whole(value: float) -> int:
+    """The integer part of ``value`` (what RV and RC report), of the value the arithmetic
+    meant: one a hair from a whole number, as floating point leaves the end of a ramp
+    (999999.9999999999 for the 1,000,000 at the end of a PN5 ramp at AC2000000, 1e-16 of it),
+    is that number; a fraction given on purpose (``JF100.999999``) is not a hair."""
+    nearest = round(value)
+    if abs(value - nearest) <= 1e-12 * max(1.0, abs(value)):
+        return nearest
+    return math.trunc(value)
+
+
+#: Motions whose ramp is linear whatever the ramp mode (``omsd.engine.ramps.velocity_change``;
+#: a jog's queue table says "Linear ramp", and a home search and a staircase ramp as a jog does).
+_LINEAR_RAMPS = frozenset({Motion.JOG, Motion.HOME, Motion.STAIRCASE})
 
 
 def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
     """PC48 §6.13 RC: "When the stage is stopped, the parameter returned will be the acceleration
     at the beginning of a ramp. When the stage is running at programmed speed ... the
-    acceleration at the end of the ramp.\""""
+    acceleration at the end of the ramp.\"" The ramp is the one the axis ran: linear for a jog
+    in any ramp mode."""
     if axis.motion is not Motion.IDLE:
         a = abs(axis.acceleration(t))
         if a > 0.0 or axis.velocity(t) == 0.0:
             return a
-        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
+        shape = pf.LINEAR if axis.motion in _LINEAR_RAMPS else axis.ramp
+        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, shape)
         return abs(up.a(up.duration))
     up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
     return abs(up.a(0.0))
@@ -83,14 +101,19 @@ def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
 @handles("RV")
 def _rv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "If the JF command is executing, the command only reports the integer part"
-    _list(ix, lambda a: str(math.trunc(a.velocity(t))), t)
+    _list(ix, lambda a: str(whole(a.velocity(t))), t)
 
 
 @handles("RU")
 def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "a floating point number with five characters to the right of the decimal point"
+    # "a floating point number with five characters to the right of the decimal point"; "the
+    # current position in user units", which with an encoder ratio are encoder counts (§6.15
+    # ER: "allowing units such as inches or revolutions to be specified in encoder counts"):
+    # ER2,1 UU10 LP5 is 50 encoder counts, 25 motor steps, and RU 5.00000
     axis = ix.axis
     value = Decimal(axis.counter(t))
+    if axis.has_encoder and axis.ratio != 1.0:
+        value = value * Decimal(axis.ratio)
     if axis.uu is not None:
         value = value / axis.uu
     ix.machine.reply_value(f"{value:.5f}", t)
