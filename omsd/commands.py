@@ -171,7 +171,7 @@ _MOTORS = {
 
 
 def _motor_fits(model: Model, motor: str, axis: str) -> bool:
-    """As the interpreter decides (omsd.dialects.interpreter._motor_fits), from the model."""
+    """As the interpreter decides (omsd.dialects.interpreter.motor_fits), from the model."""
     servo = model.is_servo(axis)
     encoder = model.has_encoder(axis)
     return {

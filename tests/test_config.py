@@ -982,3 +982,19 @@ def test_the_runtime_directory_holds_the_default_links(monkeypatch: pytest.Monke
     monkeypatch.setenv("XDG_RUNTIME_DIR", "/run/user/1234")
     assert runtime_directory() == Path("/run/user/1234/omsd")
     assert default_pty_link("xy").parent == runtime_directory()
+
+
+def test_the_default_encoder_index_is_inside_a_revolution_of_any_size(tmp_path: Path) -> None:
+    """The index defaults to count 1050 (inside the default home window, so that an encoder home
+    finds it); with fewer counts a revolution it is 1050 modulo one, which still puts an index
+    at count 1050. Given, it must be below a revolution."""
+    path = tmp_path / "omsd.toml"
+    path.write_text(MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 500\n")
+    (board,) = load_config(path).boards
+    assert board.world["X"].encoder_index == 50
+    path.write_text(MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 8000\n")
+    (board,) = load_config(path).boards
+    assert board.world["X"].encoder_index == 1050
+    assert "encoder_index: expected an integer 0..499" in load_error(
+        tmp_path, MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 500\nencoder_index = 500\n"
+    )

@@ -305,7 +305,7 @@ class AxisTable(Table):
     encoder_index: Annotated[int, integer(0)] = Field(
         _AXIS.encoder_index,
         description="The count, modulo a revolution, where the index pulse is (axes with an"
-        " encoder only).",
+        " encoder only). Left out: 1050 modulo a revolution, inside the default home window.",
     )
 
     @model_validator(mode="after")
@@ -326,7 +326,7 @@ class AxisTable(Table):
                 f" {self.home_high:g}",
                 at=(key,),
             )
-        if self.encoder_index >= self.encoder_counts_per_rev:
+        if "encoder_index" in given and self.encoder_index >= self.encoder_counts_per_rev:
             raise problem(
                 expected=f"an integer 0..{self.encoder_counts_per_rev - 1} (below"
                 " encoder_counts_per_rev)",
@@ -344,7 +344,9 @@ class AxisTable(Table):
             home_switch=SwitchType(self.home_switch),
             limit_switches=LimitWiring(self.limit_switches),
             encoder_counts_per_rev=self.encoder_counts_per_rev,
-            encoder_index=self.encoder_index,
+            encoder_index=self.encoder_index
+            if "encoder_index" in self.model_fields_set
+            else self.encoder_index % self.encoder_counts_per_rev,
         )
 
 

@@ -39,7 +39,7 @@ if TYPE_CHECKING:  # contouring is imported when a contour is defined (start-up)
 __all__ = ["Blocked", "Capture", "CommandFailed", "Interpreter", "LoopMark"]
 
 
-def _motor_fits(motor: str, axis: Axis) -> bool:
+def motor_fits(motor: str, axis: Axis) -> bool:
     """The motor types a command applies to (servo, stepper with encoder, open loop)."""
     servo = axis.is_servo
     if motor == "servo":
@@ -78,7 +78,8 @@ class Interpreter(Operands, LoopStacks):
     # fmt: off
     __slots__ = (
         "_bare", "_check_fields", "_fast", "_feedback_per_axis", "_ready", "_reports", "_syntax",
-        "axis_index", "buffer", "capacity", "capture", "commands", "contour", "depth", "dialect",
+        "axis_index", "buffer", "capacity", "capture", "commands", "contour", "contour_lead",
+        "depth", "dialect",
         "echo", "handlers", "last_move", "lexer", "loops", "machine", "mode", "mt_blocked", "only",
         "pa_entered", "pending", "ranges", "report_words", "se_entered", "while_flags", "words",
         "wq", "ws_bits",
@@ -122,6 +123,9 @@ class Interpreter(Operands, LoopStacks):
         self.mode = "single"
         self.axis_index = 0
         self.contour: ContourDefinition | None = None
+        # the lead-in acceleration of each axis of the contour that runs (RC: "While a contour
+        # is executing, the value computed to generate the appropriate lead in will be returned")
+        self.contour_lead: dict[int, float] = {}
         self.loops: list[list[LoopMark]] = [[] for _ in range(n)]
         self.while_flags: set[int] = set()
         self.wq: list[int] | None = None
@@ -321,7 +325,7 @@ class Interpreter(Operands, LoopStacks):
             # a definition in progress: only its own commands are valid until it ends
             raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
         single = self.mode == "single" and self.contour is None
-        if spec.motor is not None and single and not _motor_fits(spec.motor, self.axis):
+        if spec.motor is not None and single and not motor_fits(spec.motor, self.axis):
             raise CommandFailed(ErrorKind.WRONG_MOTOR)
         if spec.encoder_only:
             if self.mode == "single" and self.contour is None:

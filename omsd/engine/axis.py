@@ -18,6 +18,8 @@ from omsd.engine.sensing import first_look_needed, next_event
 from omsd.engine.states import HomeSearch, Motion, Pending, Wait
 from omsd.engine.trajectory import Trajectory
 
+_MOVE = Motion.MOVE
+
 __all__ = ["SERVO_CHECK", "Axis", "HomeSearch", "Motion", "Pending", "Wait"]
 
 
@@ -82,12 +84,23 @@ class Axis(AxisState):
         moved(self, t, None, None)
 
     def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
-        """Ramp down to rest at the axis's acceleration (a stop, a soft limit, after home)."""
+        """Ramp down to rest at the axis's acceleration (a stop, a soft limit, after home).
+
+        A move on a linear ramp with a base velocity ramps down to VB and stops from there: VB
+        "jumps instantly to the specified velocity, then ramps as usual. The deceleration is the
+        same in reverse. This mode is active only for linear ramps" (PC48 §6.7); a jog's ramp
+        has none ("not valid with the JG command")."""
         v = self.traj.velocity(t)
         if v == 0.0:
             self.halt(t)
             return
-        self.begin(t, pf.velocity_change(v, 0.0, self.ac), motion)
+        base = 0.0
+        if self.vb > 0.0 and self.motion is _MOVE and self.ramp.kind is pf.RampKind.LINEAR:
+            base = self.vb
+            if abs(v) <= base:
+                self.halt(t)  # (at or below the base velocity: it drops to rest at once)
+                return
+        self.begin(t, pf.velocity_change(v, math.copysign(base, v), self.ac), motion)
 
     # -- what happens next --------------------------------------------------------------------
 

@@ -80,6 +80,7 @@ class Plan:
     finals: dict[int, float]
     outputs: list[tuple[float, Output]]  # time offsets from the start
     lead_in_acceleration: float
+    lead_in: dict[int, float]  # each axis's share of it (its acceleration in the lead-in)
 
 
 def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
@@ -95,6 +96,7 @@ def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
     delta = [defn.start[i] - here[a] for i, a in enumerate(axes)]
     length = math.sqrt(sum(d * d for d in delta))
     lead_accel = 0.0
+    lead_in = dict.fromkeys(axes, 0.0)
     direction = [0.0] * n
     if length > 0.5:
         lead_accel = cv * cv / (2.0 * length)
@@ -103,6 +105,7 @@ def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
             u = delta[i] / length
             direction[i] = u
             pieces[a].append(pf.Poly(0.0, lead_accel * u, 0.0, duration))
+            lead_in[a] = abs(lead_accel * u)
         elapsed += duration
 
     for item in defn.items:
@@ -149,4 +152,5 @@ def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
         finals={a: float(round(x)) for a, x in finals.items()},
         outputs=outputs,
         lead_in_acceleration=lead_accel,
+        lead_in=lead_in,
     )

@@ -160,9 +160,10 @@ class Executor:
         return None
 
     def drop_from_groups(self, axis: Axis, ops: list[Op], t: float) -> None:
-        """A flushed axis no longer takes part in the groups of its dropped ops. A group that
-        completes for it (an AA ID the others had reached) speaks for the session that sent
-        it, not for whoever caused the flush."""
+        """A flushed axis no longer takes part in the groups of its dropped ops (``flushed``
+        in the group's data): the others are not held at a meeting it will never reach. A
+        group that completes for it speaks for the session that sent it, not for whoever
+        caused the flush."""
         machine = self.machine
         saved = machine.talker
         groups = {id(op.group): op for op in ops if op.group is not None}
@@ -170,6 +171,7 @@ class Executor:
             g = op.group
             assert g is not None
             g.members.discard(axis.index)
+            g.data["flushed"] = True
             machine.talker = op.source
             self.check_group(g, t)
         machine.talker = saved
@@ -195,6 +197,14 @@ class Executor:
         if group.data.get("gd"):
             machine.clear_done(machine.axes if group.data.get("all") else axes)
         self.start_pending(axes, t)
+
+    def done_action(self, group: SyncGroup, t: float) -> None:
+        """The done of an AA/AM ID (IN, IP, the PCIx's GN): the done flag in the status
+        register "will not be set until all axes have executed the ID command" (PC48 §6.12);
+        so never for a group an axis left by a flush (SA, KL, a limit), whose ID it will not
+        execute. The axes that did still have their own done flags."""
+        if not group.data.get("flushed"):
+            self.machine.signal_done(t)
 
     def wt_action(self, group: SyncGroup, t: float) -> None:
         group.data["until"] = t + group.data["ms"] / 1000.0

@@ -54,6 +54,9 @@ class Options:
     remainder_folds_encoder: bool = False
     #: linear interpolation puts the velocity and acceleration registers back after scaling
     linear_moves_restore: bool = False
+    #: a home search found loads the encoder of a stepper with an encoder as well as the
+    #: position counter (PCIx HR: "the position and encoder counters are loaded")
+    home_loads_encoder: bool = False
 
 
 class Front(Protocol):

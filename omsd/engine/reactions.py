@@ -83,6 +83,11 @@ def _look_for_home(axis: Axis, t: float) -> None:
         axis.halt(t)  # "The position counter is not cleared or reset."
         return
     axis.load_counter(t, home.position)
+    if axis.has_encoder and axis.servo is None and axis.host.options.home_loads_encoder:
+        # PCIx HM: "position counters will be initialized"; HR, which "behaves exactly like the
+        # HM command": "the position and encoder counters are loaded with the parameter(s)" (a
+        # servo axis's encoder is its loop's, which follows the counter)
+        axis.anchor_encoder(t, float(home.position))
     axis.anchor_tracking(t)
     axis.decelerate(t)
 

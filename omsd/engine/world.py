@@ -65,7 +65,9 @@ class AxisWorld:
     home_switch: SwitchType = SwitchType.NORMALLY_OPEN
     limit_switches: LimitWiring = LimitWiring.MATCHED
     encoder_counts_per_rev: int = 4_000
-    encoder_index: int = 0  # encoder count, modulo a revolution, where the index pulse is
+    # encoder count, modulo a revolution, where the index pulse is: inside the home switch's
+    # window, so that an encoder home (HE then HM) finds home too
+    encoder_index: int = 1_050
 
     def __post_init__(self) -> None:
         # a switch is somewhere: math.inf for "no switch" would fail deep in the search for

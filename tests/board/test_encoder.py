@@ -135,7 +135,9 @@ def test_tracking_follows_the_encoder_input(pc48e: Harness) -> None:
 def test_encoder_home_uses_the_index_inside_the_home_window() -> None:
     """§6.18 HE: home is "the logical AND of the encoder index, the external home enable and the
     encoder quadrant"; with HS (default) the home switch alone."""
-    world = {"X": AxisWorld(home_low=3990, home_high=4100, encoder_counts_per_rev=4000)}
+    world = {
+        "X": AxisWorld(home_low=3990, home_high=4100, encoder_counts_per_rev=4000, encoder_index=0)
+    }
     h = Harness("PC48-4E", world=world)
     h.send("AX VL1000 HE HM0 ")
     h.run()

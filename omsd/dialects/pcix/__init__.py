@@ -47,6 +47,7 @@ OPTIONS = Options(
     jog_disables_slip_detection=True,
     remainder_folds_encoder=True,
     linear_moves_restore=True,
+    home_loads_encoder=True,
 )
 
 

@@ -254,8 +254,11 @@ def apply(board: Core, saved: dict[str, Any]) -> list[str]:
 
 
 def factory(board: Core) -> None:
-    """RF: "Current parameters := factory defaults"; the flash is left as it is."""
+    """RF: "Current parameters := factory defaults"; the flash is left as it is. Among them
+    (the RF list): "Software over travel limits are disabled ( TL0,0; )"."""
     board.ramp_tables.clear()
     board.scurves.clear()
     for axis in board.axes:
         axis.factory_parameters()
+        axis.travel_limits = None
+        axis.invalidate()

@@ -241,7 +241,7 @@ def _gn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     go.action = machine.executor.go_action
     go.data["gd"] = False
     done = SyncGroup(set(members), barrier=False)
-    done.action = lambda g, when: machine.signal_done(when)
+    done.action = machine.executor.done_action
     items: list[tuple[Axis, Op]] = []
     for index in members:
         axis = machine.axes[index]

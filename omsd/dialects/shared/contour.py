@@ -131,6 +131,7 @@ def run_contour(ix: Interpreter, defn: ContourDefinition, t: float) -> None:
     here = {a.index: a.position(tick) for a in axes}
     decel = min(a.ac for a in axes)
     p = plan(defn, here, decel)
+    ix.contour_lead = p.lead_in
     for a in axes:
         a.begin(tick, p.pieces[a.index], Motion.CONTOUR, final=p.finals[a.index])
         v = a.traj.velocity(a.traj.end_time - 1e-9) if a.traj.pieces else 0.0

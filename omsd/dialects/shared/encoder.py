@@ -3,7 +3,7 @@ encoder home, status)."""
 
 from __future__ import annotations
 
-from omsd.dialects.interpreter import CommandFailed, Interpreter
+from omsd.dialects.interpreter import CommandFailed, Interpreter, motor_fits
 from omsd.dialects.shared.table import handles
 from omsd.engine.queue import Op
 from omsd.models.spec import Cell
@@ -27,15 +27,21 @@ def _er(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("HV", "HG", "HD", "ES")
 def _hold_parameter(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    axis = ix.axis
-    raw = ix.one(cmd)
-    assert raw is not None
+    """The current axis, or in AA/AM (the PCIx's ``HD#,#,#,#;``; a field left empty: "not to
+    be changed for that axis") each axis given, which must be one the command applies to."""
     code = cmd.mnemonic
-    if code == "HV":
-        value = ix.check(code, ix.convert(axis, raw, "vel"))
-    else:  # HG, HD, ES: whole numbers
-        value = float(ix.integer(raw, code))
-    ix.enqueue([(axis, Op(code, (value,), ix.cost(cell, axis)))])
+    motor = ix.commands[code].motor
+    ops = []
+    for index, raw in ix.items(cmd).items():
+        axis = ix.machine.axes[index]
+        if ix.mode != "single" and motor is not None and not motor_fits(motor, axis):
+            raise CommandFailed(ErrorKind.WRONG_MOTOR)
+        if code == "HV":
+            value = ix.check(code, ix.convert(axis, raw, "vel"))
+        else:  # HG, HD, ES: whole numbers
+            value = float(ix.integer(raw, code))
+        ops.append((axis, Op(code, (value,), ix.cost(cell, axis))))
+    ix.enqueue(ops)
 
 
 @handles("HE", "HS")

@@ -179,12 +179,22 @@ def _vs(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("HM", "HR")
 def _home(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    axis = ix.axis
-    raw = ix.one(cmd, required=False)
-    value = ix.convert(axis, raw, "dist") if raw is not None else 0.0
-    _check_target(ix, value, cmd.mnemonic)
+    """The current axis, or in AA/AM (the PCIx: ``HM#,#,#,#;``, "Parameters must be specified
+    in multi-axis modes to inform the PCIx which axes are to be homed") each axis given."""
+    if ix.mode == "single":
+        items: dict[int, Decimal | None] = {ix.axis_index: ix.one(cmd, required=False)}
+    else:
+        items = dict(ix.per_axis(cmd))
+        if not items:
+            raise CommandFailed(ErrorKind.MISSING_PARAMETER)
     direction = 1 if cmd.mnemonic == "HM" else -1
-    ix.enqueue([(axis, Op("HM", (value, False, direction), ix.cost(cell, axis)))])
+    ops = []
+    for index, raw in items.items():
+        axis = ix.machine.axes[index]
+        value = ix.convert(axis, raw, "dist") if raw is not None else 0.0
+        _check_target(ix, value, cmd.mnemonic)
+        ops.append((axis, Op("HM", (value, False, direction), ix.cost(cell, axis))))
+    ix.enqueue(ops)
 
 
 @handles("KM", "KR")

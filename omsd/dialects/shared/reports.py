@@ -86,7 +86,10 @@ def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
     """PC48 §6.13 RC: "When the stage is stopped, the parameter returned will be the acceleration
     at the beginning of a ramp. When the stage is running at programmed speed ... the
     acceleration at the end of the ramp.\"" The ramp is the one the axis ran: linear for a jog
-    in any ramp mode."""
+    in any ramp mode. "While a contour is executing, the value computed to generate the
+    appropriate lead in will be returned", for the whole contour."""
+    if axis.motion is Motion.CONTOUR:
+        return ix.contour_lead.get(axis.index, 0.0)
     if axis.motion is not Motion.IDLE:
         a = abs(axis.acceleration(t))
         if a > 0.0 or axis.velocity(t) == 0.0:

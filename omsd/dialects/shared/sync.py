@@ -30,7 +30,7 @@ def _id(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # set their done flags."
     members = _task_axes(ix)
     group = SyncGroup(set(members), barrier=False)
-    group.action = lambda g, when: machine.signal_done(when)
+    group.action = machine.executor.done_action
     ix.enqueue(
         [(machine.axes[i], Op("ID", (), ix.cost(cell, machine.axes[i]), group)) for i in members]
     )
@@ -50,7 +50,7 @@ def _in(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     machine = ix.machine
     items = ix.items(cmd)
     group = SyncGroup(set(items), barrier=False)
-    group.action = lambda g, when: machine.signal_done(when)
+    group.action = machine.executor.done_action
     ops = []
     for index, raw in items.items():
         axis = machine.axes[index]
@@ -68,7 +68,7 @@ def _ip(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # VS4 AA form: like ID, DON_S once every encoder axis of the task is in position
     members = [i for i in _task_axes(ix) if machine.axes[i].has_encoder]
     group = SyncGroup(set(members), barrier=False)
-    group.action = lambda g, when: machine.signal_done(when)
+    group.action = machine.executor.done_action
     ix.enqueue(
         [(machine.axes[i], Op("IP", (), ix.cost(cell, machine.axes[i]), group)) for i in members]
     )
