@@ -984,17 +984,21 @@ def test_the_runtime_directory_holds_the_default_links(monkeypatch: pytest.Monke
     assert default_pty_link("xy").parent == runtime_directory()
 
 
-def test_the_default_encoder_index_is_inside_a_revolution_of_any_size(tmp_path: Path) -> None:
-    """The index defaults to count 1050 (inside the default home window, so that an encoder home
-    finds it); with fewer counts a revolution it is 1050 modulo one, which still puts an index
-    at count 1050. Given, it must be below a revolution."""
+def test_the_default_encoder_index_is_in_the_middle_of_the_home_window(tmp_path: Path) -> None:
+    """Left out, the index is at the middle of the home window, modulo a revolution (so that an
+    encoder home finds it in any window); given, it must be below a revolution."""
     path = tmp_path / "omsd.toml"
-    path.write_text(MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 500\n")
-    (board,) = load_config(path).boards
-    assert board.world["X"].encoder_index == 50
-    path.write_text(MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 8000\n")
-    (board,) = load_config(path).boards
-    assert board.world["X"].encoder_index == 1050
+    cases = [
+        ("encoder_counts_per_rev = 500\n", 50),  # 1050, the default window's middle, mod 500
+        ("encoder_counts_per_rev = 8000\n", 1050),
+        ("home_low = 0\nhome_high = 100\n", 50),
+        ("home_low = -7990\nhome_high = -7890\n", 60),  # -7940 mod 4000
+        ("encoder_index = 7\n", 7),
+    ]
+    for keys, index in cases:
+        path.write_text(MINIMAL + "[board.axes.X]\n" + keys)
+        (board,) = load_config(path).boards
+        assert board.world["X"].index_count == index, keys
     assert "encoder_index: expected an integer 0..499" in load_error(
         tmp_path, MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 500\nencoder_index = 500\n"
     )

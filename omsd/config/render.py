@@ -307,6 +307,8 @@ def _board(board: BoardConfig) -> dict[str, Any]:
             ):
                 continue
             value = getattr(world, f.name)
+            if value is None:
+                continue  # (encoder_index left out: the middle of the home window)
             axis[f.name] = getattr(value, "value", value)
         axes[letter] = axis
     out["axes"] = axes

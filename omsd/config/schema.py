@@ -302,10 +302,11 @@ class AxisTable(Table):
         _AXIS.encoder_counts_per_rev,
         description="Encoder counts per revolution (axes with an encoder only).",
     )
-    encoder_index: Annotated[int, integer(0)] = Field(
-        _AXIS.encoder_index,
+    encoder_index: Annotated[int, integer(0), Default("the home window's middle")] | None = Field(
+        None,
         description="The count, modulo a revolution, where the index pulse is (axes with an"
-        " encoder only). Left out: 1050 modulo a revolution, inside the default home window.",
+        " encoder only). Left out: the middle of the home window, modulo a revolution, so that"
+        " an encoder home (HE) finds home.",
     )
 
     @model_validator(mode="after")
@@ -326,7 +327,7 @@ class AxisTable(Table):
                 f" {self.home_high:g}",
                 at=(key,),
             )
-        if "encoder_index" in given and self.encoder_index >= self.encoder_counts_per_rev:
+        if self.encoder_index is not None and self.encoder_index >= self.encoder_counts_per_rev:
             raise problem(
                 expected=f"an integer 0..{self.encoder_counts_per_rev - 1} (below"
                 " encoder_counts_per_rev)",
@@ -344,9 +345,7 @@ class AxisTable(Table):
             home_switch=SwitchType(self.home_switch),
             limit_switches=LimitWiring(self.limit_switches),
             encoder_counts_per_rev=self.encoder_counts_per_rev,
-            encoder_index=self.encoder_index
-            if "encoder_index" in self.model_fields_set
-            else self.encoder_index % self.encoder_counts_per_rev,
+            encoder_index=self.encoder_index,
         )
 
 

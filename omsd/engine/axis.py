@@ -19,6 +19,8 @@ from omsd.engine.states import HomeSearch, Motion, Pending, Wait
 from omsd.engine.trajectory import Trajectory
 
 _MOVE = Motion.MOVE
+#: Below this (steps a second) the end of a move's ramp down is rest, not a base velocity.
+BASE_FLOOR = 1e-6
 
 __all__ = ["SERVO_CHECK", "Axis", "HomeSearch", "Motion", "Pending", "Wait"]
 
@@ -86,18 +88,23 @@ class Axis(AxisState):
     def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
         """Ramp down to rest at the axis's acceleration (a stop, a soft limit, after home).
 
-        A move on a linear ramp with a base velocity ramps down to VB and stops from there: VB
-        "jumps instantly to the specified velocity, then ramps as usual. The deceleration is the
-        same in reverse. This mode is active only for linear ramps" (PC48 §6.7); a jog's ramp
-        has none ("not valid with the JG command")."""
+        A move with a base velocity ramps down to it and stops from there: VB "jumps instantly
+        to the specified velocity, then ramps as usual. The deceleration is the same in reverse.
+        This mode is active only for linear ramps" (PC48 §6.7). The base velocity is the move's
+        own, where its profile's ramp down ends (VB on a linear ramp, scaled with the move for
+        ML/MT; none on a parabolic or cosine ramp, for the PCIx's GU, or a jog's, "not valid
+        with the JG command"), not the registers', which may have changed since it began."""
         v = self.traj.velocity(t)
         if v == 0.0:
             self.halt(t)
             return
         base = 0.0
-        if self.vb > 0.0 and self.motion is _MOVE and self.ramp.kind is pf.RampKind.LINEAR:
-            base = self.vb
-            if abs(v) <= base:
+        if self.motion is _MOVE and self.traj.pieces:
+            last = self.traj.pieces[-1]
+            base = abs(last.v(last.duration))
+            if base < BASE_FLOOR:
+                base = 0.0  # (a ramp to rest, less what floating point leaves)
+            elif abs(v) <= base:
                 self.halt(t)  # (at or below the base velocity: it drops to rest at once)
                 return
         self.begin(t, pf.velocity_change(v, math.copysign(base, v), self.ac), motion)

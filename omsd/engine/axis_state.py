@@ -376,7 +376,7 @@ class AxisState:
         if not self.home_line_low(t):
             return False
         cpr = self.world.encoder_counts_per_rev
-        return cpr > 0 and (self.encoder(t) - self.world.encoder_index) % cpr == 0
+        return cpr > 0 and (self.encoder(t) - self.world.index_count) % cpr == 0
 
     def home_condition(self, t: float) -> bool:
         return self.encoder_home(t) if self.home_encoder else self.home_sensed(t)

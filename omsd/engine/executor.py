@@ -160,8 +160,9 @@ class Executor:
         return None
 
     def drop_from_groups(self, axis: Axis, ops: list[Op], t: float) -> None:
-        """A flushed axis no longer takes part in the groups of its dropped ops (``flushed``
-        in the group's data): the others are not held at a meeting it will never reach. A
+        """A flushed axis no longer takes part in the groups of its dropped ops
+        (``flushed_from`` in the group's data: the first round it did not reach): the others
+        are not held at a meeting it will never reach. A
         group that completes for it speaks for the session that sent it, not for whoever
         caused the flush."""
         machine = self.machine
@@ -171,7 +172,10 @@ class Executor:
             g = op.group
             assert g is not None
             g.members.discard(axis.index)
-            g.data["flushed"] = True
+            # the first round of the group the axis will not reach (in a loop, the rounds it
+            # did reach before the flush stand)
+            missed = g.arrivals.get(axis.index, 0) + 1
+            g.data["flushed_from"] = min(g.data.get("flushed_from", missed), missed)
             machine.talker = op.source
             self.check_group(g, t)
         machine.talker = saved
@@ -201,9 +205,11 @@ class Executor:
     def done_action(self, group: SyncGroup, t: float) -> None:
         """The done of an AA/AM ID (IN, IP, the PCIx's GN): the done flag in the status
         register "will not be set until all axes have executed the ID command" (PC48 §6.12);
-        so never for a group an axis left by a flush (SA, KL, a limit), whose ID it will not
-        execute. The axes that did still have their own done flags."""
-        if not group.data.get("flushed"):
+        so never for a round of the group that an axis left by a flush (SA, KL, a limit) did
+        not reach: it will not execute that ID. The rounds of a loop that every axis finished
+        before the flush had theirs; the axes that got there keep their own done flags."""
+        missed = group.data.get("flushed_from")
+        if missed is None or group.completed_round < missed:
             self.machine.signal_done(t)
 
     def wt_action(self, group: SyncGroup, t: float) -> None:

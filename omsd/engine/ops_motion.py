@@ -155,11 +155,12 @@ def _index_points(axis: Axis, direction: int) -> tuple[float, ...]:
         return axis.enc_base + axis.ratio * (p - axis.enc_phys)
 
     lo, hi = sorted((enc_at(w.home_low), enc_at(w.home_high)))
-    first = math.ceil((lo - w.encoder_index) / cpr)
+    index = w.index_count
+    first = math.ceil((lo - index) / cpr)
     points: list[float] = []
     k = first
-    while k * cpr + w.encoder_index < hi and len(points) < 64:
-        count = k * cpr + w.encoder_index
+    while k * cpr + index < hi and len(points) < 64:
+        count = k * cpr + index
         points.append(axis.enc_phys + (count - axis.enc_base) / axis.ratio)
         k += 1
     return tuple(points) or (math.inf * direction,)

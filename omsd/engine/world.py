@@ -65,9 +65,9 @@ class AxisWorld:
     home_switch: SwitchType = SwitchType.NORMALLY_OPEN
     limit_switches: LimitWiring = LimitWiring.MATCHED
     encoder_counts_per_rev: int = 4_000
-    # encoder count, modulo a revolution, where the index pulse is: inside the home switch's
-    # window, so that an encoder home (HE then HM) finds home too
-    encoder_index: int = 1_050
+    # encoder count, modulo a revolution, where the index pulse is; None: the middle of the
+    # home switch's window (``index_count``), so that an encoder home (HE then HM) finds home
+    encoder_index: int | None = None
 
     def __post_init__(self) -> None:
         # a switch is somewhere: math.inf for "no switch" would fail deep in the search for
@@ -80,6 +80,14 @@ class AxisWorld:
                     f"AxisWorld {name}: expected a finite number of motor steps, got {value!r}"
                     " (for a switch out of reach, a far position: the default is 10,000,000)"
                 )
+
+    @property
+    def index_count(self) -> int:
+        """The encoder count, modulo a revolution, where the index pulse is."""
+        if self.encoder_index is not None:
+            return self.encoder_index
+        middle = math.floor((self.home_low + self.home_high) / 2.0)
+        return middle % self.encoder_counts_per_rev if self.encoder_counts_per_rev > 0 else 0
 
     def with_changes(self, **changes: object) -> AxisWorld:
         return replace(self, **changes)  # type: ignore[arg-type]

@@ -23,6 +23,7 @@ import pytest
 
 from omsd.board.events import DoneEvent, ErrorKind
 from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
 from omsd.engine.registers import DON_S
 
 from .support import frame
@@ -102,6 +103,8 @@ def test_the_pcix_sets_hold_parameters_of_several_axes_in_aa_mode() -> None:
         b"hd7\n\rhg1\n\rhv0\n\r",
         b"hd0\n\rhg1\n\rhv200\n\r",
     ]
+    h.send("AA;HD;")  # no field, no axis given
+    assert [e.kind for e in h.errors()] == [ErrorKind.MISSING_PARAMETER]
     s = Harness("PCIX-202")  # X, Y servo, Z, T open loop: HD is for steppers with encoders
     s.send("AA;HD5,5,5,5;")
     assert [e.kind for e in s.errors()] == [ErrorKind.WRONG_MOTOR]
@@ -158,3 +161,33 @@ def test_rc_during_a_contour_is_its_lead_in_value_throughout(model: str) -> None
         assert h.send("AA RC").split(b",")[:2] == [b"\n\r250", b"250"], t
     h.until(40.0)
     assert h.send("AA RC").split(b",")[:2] == [b"\n\r100000", b"100000"]
+
+
+def test_a_flush_keeps_the_done_of_the_rounds_every_axis_finished() -> None:
+    """In a loop, the AA/AM ID of a round every axis executed before one of them was flushed
+    (a limit on X in the second pass) still sets the done flag; the rounds it missed do not."""
+    h = Harness("PC48-4E", world={"X": AxisWorld(positive_limit=2000)})
+    h.send("AM VL1000,1000; AC10000,10000; LS2 MR100,3000 GO ID MR5000 GO LE ")
+    h.until(20.0)
+    assert [(e.time, e.done_register) for e in h.events() if isinstance(e, DoneEvent)] == [
+        (pytest.approx(3.1, abs=1e-3), 3)
+    ]
+
+
+def test_a_stop_takes_the_base_velocity_of_the_move_it_stops() -> None:
+    """The move's own: a CN sent for another axis after the move began does not take its VB
+    away; the PCIx's GU move, which has none ("does not work with DC"), ramps to rest."""
+    h = Harness("PC48-4E")
+    h.send("AY VB500 VL1000 AC5000 MR5000 GO AX CN ")
+    h.until(1.0)
+    start = number(h.send("AY RP"))
+    h.send("AY ST ")
+    h.until(3.0)
+    assert number(h.send("AY RP")) - start == 75
+    p = Harness("PCIX-040")
+    p.send("AX;VB500;VL1000;AC5000;DC5000;MR5000;GU;")
+    p.until(1.0)
+    start = number(p.send("RP;"))
+    p.send("ST;")
+    p.until(3.0)
+    assert number(p.send("RP;")) - start == 100  # 1000 steps/s to rest at AC5000

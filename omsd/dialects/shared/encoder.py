@@ -31,8 +31,11 @@ def _hold_parameter(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None
     be changed for that axis") each axis given, which must be one the command applies to."""
     code = cmd.mnemonic
     motor = ix.commands[code].motor
+    items = ix.items(cmd)
+    if not items:  # (AA/AM with no field: no axis given)
+        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
     ops = []
-    for index, raw in ix.items(cmd).items():
+    for index, raw in items.items():
         axis = ix.machine.axes[index]
         if ix.mode != "single" and motor is not None and not motor_fits(motor, axis):
             raise CommandFailed(ErrorKind.WRONG_MOTOR)
