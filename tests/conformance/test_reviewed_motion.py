@@ -174,20 +174,21 @@ def test_a_flush_keeps_the_done_of_the_rounds_every_axis_finished() -> None:
     ]
 
 
+def stop_run(model: str, setup: str, rp: str, stop: str) -> int:
+    """How far an axis runs from a stop at 1 s after ``setup`` (``rp``: its RP)."""
+    h = Harness(model)
+    h.send(setup)
+    h.until(1.0)
+    start = number(h.send(rp))
+    h.send(stop)
+    h.until(3.0)
+    return number(h.send(rp)) - start
+
+
 def test_a_stop_takes_the_base_velocity_of_the_move_it_stops() -> None:
     """The move's own: a CN sent for another axis after the move began does not take its VB
-    away; the PCIx's GU move, which has none ("does not work with DC"), ramps to rest."""
-    h = Harness("PC48-4E")
-    h.send("AY VB500 VL1000 AC5000 MR5000 GO AX CN ")
-    h.until(1.0)
-    start = number(h.send("AY RP"))
-    h.send("AY ST ")
-    h.until(3.0)
-    assert number(h.send("AY RP")) - start == 75
-    p = Harness("PCIX-040")
-    p.send("AX;VB500;VL1000;AC5000;DC5000;MR5000;GU;")
-    p.until(1.0)
-    start = number(p.send("RP;"))
-    p.send("ST;")
-    p.until(3.0)
-    assert number(p.send("RP;")) - start == 100  # 1000 steps/s to rest at AC5000
+    away; the PCIx's GU move, which has none ("does not work with DC"), ramps to rest (1000
+    steps/s at AC5000: 100 steps)."""
+    assert stop_run("PC48-4E", "AY VB500 VL1000 AC5000 MR5000 GO AX CN ", "AY RP", "AY ST ") == 75
+    setup = "AX;VB500;VL1000;AC5000;DC5000;MR5000;GU;"
+    assert stop_run("PCIX-040", setup, "RP;", "ST;") == 100
