@@ -93,6 +93,8 @@ class DriverLink:
         self._events: list[Event] = []
         self._notes: list[str] = []
         self._last_done: float | None = None
+        # when the done register was last read for a DONE marker (the link's time then)
+        self._done_read_at: float | None = None
         # the time of a DONE / limit that no wait character of its session has claimed yet
         # (each one can release at most one wait)
         self._unclaimed: dict[tuple[int, int], float] = {}
@@ -369,9 +371,16 @@ class DriverLink:
                 merge(pieces, source, b"$" + eos)
             elif isinstance(item, DoneEvent):
                 done = board.read_done_register(now)
-                if not (done == 0 and self._last_done == item.time):
-                    # completions on the same sample are one interrupt: the first read of the
-                    # register has every bit, a second marker would only say "nothing"
+                read_before = self._done_read_at
+                self._done_read_at = now
+                if not (
+                    done == 0
+                    and (self._last_done == item.time or (read_before or -1.0) >= item.time)
+                ):
+                    # completions on the same sample are one interrupt, and so are those a
+                    # read of the register came after (the link run late, as an interrupt
+                    # served late): the first read has every bit, a second marker would only
+                    # say "nothing"
                     merge(pieces, source, b"!" + bytes([done]) + eos)
                 self._last_done = item.time
                 if mine and self._waiting == WAIT_DONE and item.time >= self._wait_since:

@@ -101,6 +101,26 @@ def test_done_byte_can_be_any_value_even_the_end_character() -> None:
     assert h.take() == b"!\n\n"
 
 
+def test_a_late_run_gives_one_marker_for_the_dones_its_read_took() -> None:
+    """X done at 0.1 s and Y at 0.3 s: run at each deadline, a marker each (``!\x01``,
+    ``!\x02``); run once, late, after both (a service woken late, as an interrupt served
+    late), the one read of the register takes both bits: ``!\x03``, and no second marker that
+    "nothing" is done (``!\x00``), which a real interrupt never reads. PC48 §7.3.3: "A DONE
+    interrupt will place an ! into the data stream followed by the byte read from the done
+    flag register"."""
+    commands = b"AX VL1000 MR100 GO ID AY VL1000 MR300 GO ID\r"
+    on_time = driver("PC48-4E")
+    on_time.write(commands)
+    on_time.run(1.0)
+    assert on_time.take() == b"!\x01\n!\x02\n"
+    late = driver("PC48-4E")
+    late.write(commands)
+    late.t = 1.0
+    late.write(b"")
+    assert late.take() == b"!\x03\n"
+    assert sum(type(e).__name__ == "DoneEvent" for e in late.events) == 2  # both in the log
+
+
 def test_limit_and_slip_markers() -> None:
     h = driver("PC48-4E", world={"X": AxisWorld(positive_limit=500)})
     h.write(b"AX VL10000 MR1000 GO ")
