@@ -79,8 +79,7 @@ class Plan:
     pieces: dict[int, list[pf.Piece]]
     finals: dict[int, float]
     outputs: list[tuple[float, Output]]  # time offsets from the start
-    lead_in_acceleration: float
-    lead_in: dict[int, float]  # each axis's share of it (its acceleration in the lead-in)
+    lead_in: dict[int, float]  # each axis's acceleration in the lead-in (RC in the contour)
 
 
 def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
@@ -151,6 +150,5 @@ def plan(defn: ContourDefinition, here: dict[int, float], decel: float) -> Plan:
         pieces=pieces,
         finals={a: float(round(x)) for a, x in finals.items()},
         outputs=outputs,
-        lead_in_acceleration=lead_accel,
         lead_in=lead_in,
     )

@@ -92,7 +92,6 @@ class DriverLink:
         self._echoing: set[int] = set()  # sessions given echoed text not yet ended by the EOS
         self._events: list[Event] = []
         self._notes: list[str] = []
-        self._last_done: float | None = None
         # when the done register was last read for a DONE marker (the link's time then)
         self._done_read_at: float | None = None
         # the time of a DONE / limit that no wait character of its session has claimed yet
@@ -373,16 +372,12 @@ class DriverLink:
                 done = board.read_done_register(now)
                 read_before = self._done_read_at
                 self._done_read_at = now
-                if not (
-                    done == 0
-                    and (self._last_done == item.time or (read_before or -1.0) >= item.time)
-                ):
-                    # completions on the same sample are one interrupt, and so are those a
-                    # read of the register came after (the link run late, as an interrupt
-                    # served late): the first read has every bit, a second marker would only
+                if not (done == 0 and read_before is not None and read_before >= item.time):
+                    # completions a read of the register came after are one interrupt: those on
+                    # the same sample, and those before a late run of the link (an interrupt
+                    # served late); the first read has every bit, a second marker would only
                     # say "nothing"
                     merge(pieces, source, b"!" + bytes([done]) + eos)
-                self._last_done = item.time
                 if mine and self._waiting == WAIT_DONE and item.time >= self._wait_since:
                     session = self._wait_session
                     self._release(now)

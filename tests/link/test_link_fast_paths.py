@@ -90,7 +90,7 @@ def driver_state(link: Link) -> Any:
         link._wait_since,
         sorted(link._echoing),
         sorted(link._unclaimed.items()),
-        link._last_done,
+        link._done_read_at,
         list(link._pieces),
         list(link._events),
         link.eos,
