@@ -362,12 +362,43 @@ class Executor:
         axis.in_position = False
 
     def hold_off(self, axis: Axis) -> None:
-        """ "Hold and slip detection are disabled if an LP, HM, HR, SA, ST or KL command is
-        entered or if a limit is encountered.\""""
+        """Position hold and slip detection off, as HF and a limit turn them off on every board
+        (and as the PC48's "LP, HM, HR, SA, ST or KL" do)."""
         axis.hold = False
         axis.slip_detect = False
         axis.in_position = True
         axis.invalidate()
+
+    def stopped_at_once(self, axis: Axis, t: float) -> None:
+        """A stop that left the axis at rest at once (a kill, a slip kill, a stop with no speed
+        to ramp down from) ends its motion as a motion's end does: in position, and a hold the
+        stop left on (the PCIx's: neither of its lists names a stop) holds where the axis is,
+        not where it was before the motion."""
+        axis.in_position = True
+        if axis.hold:
+            axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
+            self.check_hold(axis, t)
+
+    def cancel(self, axis: Axis, command: str) -> None:
+        """What executing ``command`` ends, as the dialect lists it (:class:`Options`
+        ``hold_cancelled_by``, ``slip_cancelled_by``): on the PC48 and VS4 both ("Hold and slip
+        detection are disabled if an LP, HM, HR, SA, ST or KL command is entered"); on the
+        PCIx one list for each (its HN page and its IS page)."""
+        options = self.machine.options
+        hold = command in options.hold_cancelled_by
+        slip = command in options.slip_cancelled_by
+        if hold and slip:
+            self.hold_off(axis)
+            return
+        if hold and not axis.is_servo:
+            # PCIx HN: "For stepper axes with encoders, this mode will be canceled" (a servo's
+            # HN is its closed loop, which these commands leave alone)
+            axis.hold = False
+            axis.in_position = True
+            axis.invalidate()
+        if slip:
+            axis.slip_detect = False
+            axis.invalidate()
 
 
 def motion_wait(axis: Axis) -> Wait | None:

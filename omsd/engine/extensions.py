@@ -7,7 +7,8 @@ The engine knows no command language. A dialect (:mod:`omsd.dialects`) hands a
 * :class:`Framing`: the bytes around a value and a status reply, and the mark of a command
   error in the board's own stream;
 * :class:`Options`: behaviour switches where the manuals of two families disagree about a
-  general mechanism (soft limits per axis or per board, whether a jog ends slip detection ...);
+  general mechanism (soft limits per axis or per board, which commands end position
+  maintenance and slip detection ...);
 * extra executor ops and sensor hooks (:data:`omsd.engine.executor.OpFunction`,
   :data:`omsd.engine.executor.SensorHook`), for the queued commands only one dialect has.
 
@@ -38,6 +39,11 @@ class Framing:
 BARE = Framing((b"", b""), (b"", b""))
 
 
+#: PC48 HN and IS (the VS4's pages say the same): "Hold and slip detection are disabled if an LP,
+#: HM, HR, SA, ST or KL command is entered or if a limit is encountered."
+PC48_CANCELS = frozenset({"LP", "HM", "HR", "SA", "ST", "KL"})
+
+
 @dataclass(frozen=True, slots=True)
 class Options:
     """Switches of general mechanisms, set by the dialect a model row names."""
@@ -48,8 +54,13 @@ class Options:
     soft_limit_per_axis: bool = False
     #: the motions that ramp down at a limit when the soft-limit mode is on
     soft_limit_motions: frozenset[Motion] = frozenset({Motion.MOVE})
-    #: starting a jog switches slip detection off
-    jog_disables_slip_detection: bool = False
+    #: the commands that end position maintenance (HN) on a stepper with an encoder, and those
+    #: that end slip detection (IS), as the manual names them (HF and a limit end both on every
+    #: board). A command counts when it executes from the axis's queue (a contour when it
+    #: starts), by its own name, except that JF is looked up as JG and a stop as ``ST`` (ST, SA,
+    #: SD, SI) or, if it kills, ``KL`` (KL, KS, Control-D). The defaults: :data:`PC48_CANCELS`.
+    hold_cancelled_by: frozenset[str] = PC48_CANCELS
+    slip_cancelled_by: frozenset[str] = PC48_CANCELS
     #: the remainder op folds the encoder position as well as the counter
     remainder_folds_encoder: bool = False
     #: linear interpolation puts the velocity and acceleration registers back after scaling

@@ -37,8 +37,7 @@ def _jog(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # velocity". The ramp is linear in every ramp mode (its queue table: "Linear ramp").
     machine = ex.machine
     v = axis.to_motor(op.args[0])
-    if machine.options.jog_disables_slip_detection:
-        axis.slip_detect = False
+    ex.cancel(axis, "JG")  # JF too: it "will jog one or more axes ... like the JG command"
     tick = machine.clock.at_or_after(t)
     v0 = axis.velocity(tick)
     if v:
@@ -88,6 +87,7 @@ def _staircase(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # PC48 §6.20: run to the absolute position at the new velocity; control passes on when
     # it is reached; "If a new MV command is sent after the controller has already passed
     # the destination ... the controller will continue to move at the old velocity."
+    ex.cancel(axis, "MV")
     clock = ex.machine.clock
     dest = axis.to_motor(op.args[0])
     v = abs(axis.to_motor(op.args[1])) * axis.direction
@@ -106,6 +106,7 @@ def _staircase(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 def _stop_at(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # "stop at the specified position ... If there is insufficient distance to stop at the
     # previously specified deceleration ... the controller will stop as soon as possible"
+    ex.cancel(axis, op.code)  # SP or FP
     dest = float(math.trunc(axis.to_motor(op.args[0])))
     tick = ex.machine.clock.at_or_after(t)
     v0 = axis.velocity(tick)
@@ -125,7 +126,7 @@ def _home(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # supplied ... The axis will not stop at home, but ... decelerates to a stop."
     position, kill, direction = op.args
     tick = ex.machine.clock.at_or_after(t)
-    ex.hold_off(axis)
+    ex.cancel(axis, "HM" if direction > 0 else "HR")
     v0 = axis.velocity(tick)
     v = direction * axis.vl
     axis.direction = direction
@@ -168,16 +169,20 @@ def _index_points(axis: Axis, direction: int) -> tuple[float, ...]:
 
 def _stop(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     kill = bool(op.args and op.args[0])
-    ex.hold_off(axis)
+    ex.cancel(axis, "KL" if kill else "ST")
     axis.home = None
     if kill:
         axis.halt(t)
+        ex.stopped_at_once(axis, t)
         return None
     tick = ex.machine.clock.at_or_after(t)
     if axis.motion is Motion.IDLE:
         return None
     axis.decelerate(tick)
-    return motion_wait(axis)
+    if not axis.moving:
+        ex.stopped_at_once(axis, tick)
+        return None
+    return Wait("motion")
 
 
 MOTION_OPS: dict[str, OpFunction] = {

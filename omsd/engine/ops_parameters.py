@@ -51,10 +51,12 @@ def _lp(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
         # give a fraction of an encoder count: ER1000,2000 UU0.5 LP601 is 300.5, 601 steps)
         axis.load_counter(t, float(math.trunc(axis.to_motor(value))))
         axis.anchor_encoder(t, float(math.trunc(value)))
-        ex.hold_off(axis)
+        ex.cancel(axis, "LP")
     else:
         axis.load_counter(t, float(math.trunc(value)))
     axis.hold_goal = float(axis.encoder(t))
+    if axis.hold:  # (the PCIx's LP leaves the hold on: it holds where the load put it)
+        ex.check_hold(axis, t)
     return None
 
 
@@ -116,6 +118,7 @@ def _rm(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 
 
 def _er(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    ex.cancel(axis, "ER")
     axis.anchor_encoder(t)
     axis.ratio = op.args[0] / op.args[1]
     axis.anchor_encoder(t)
@@ -191,6 +194,7 @@ def _is(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 
 
 def _et(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
+    ex.cancel(axis, "ET")
     axis.tracking = True
     axis.anchor_tracking(t)
     return None

@@ -57,9 +57,12 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
         machine.registers.status |= ENC_S | DON_S
         machine.emit(SlipEvent(t, axis.letter))
         if axis.slip_kill:
-            # "the axis will be killed as though a KL command had been issued"
+            # "the PCIx will kill motion on the axis that slipped as though a KL command had been
+            # issued to the axis" (TN)
             axis.halt(t)
             ex.flush(axis, t)
+            ex.cancel(axis, "KL")
+            ex.stopped_at_once(axis, t)
     if axis.hold and axis.motion is Motion.IDLE:
         ex.check_hold(axis, t)
 

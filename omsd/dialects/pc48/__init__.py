@@ -5,7 +5,8 @@ The shared OMS language (:mod:`omsd.dialects.shared`) with the commands of
 (rows per family where the PC46 or VS4 differ), the ``<LF><CR>text<LF><CR>`` framing (a status
 "one line feed and two carriage returns on each end") and the engine as the PC48 manual
 describes it (soft limits one mode for the board, for point-to-point moves only; slip tolerance
-0 at power-up).
+0 at power-up; one list of the commands that end position hold and slip detection, HN and IS:
+"Hold and slip detection are disabled if an LP, HM, HR, SA, ST or KL command is entered").
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from omsd.dialects.pc48.commands import PC48_HANDLERS, PC48_OPS
 from omsd.dialects.pc48.ranges import PC48_RANGES
 from omsd.dialects.registry import AnyHandler, Dialect, register
 from omsd.dialects.shared import HANDLERS, PURE_REPORTS, REPORTS
-from omsd.engine.extensions import Framing, Options
+from omsd.engine.extensions import PC48_CANCELS, Framing, Options
 from omsd.engine.states import Motion
 from omsd.models.spec import CommandSpec, Model
 
@@ -31,7 +32,8 @@ OPTIONS = Options(
     slip_tolerance=0.0,
     soft_limit_per_axis=False,
     soft_limit_motions=frozenset({Motion.MOVE}),
-    jog_disables_slip_detection=False,
+    hold_cancelled_by=PC48_CANCELS,
+    slip_cancelled_by=PC48_CANCELS,
     remainder_folds_encoder=False,
     linear_moves_restore=False,
 )

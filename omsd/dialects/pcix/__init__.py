@@ -10,8 +10,9 @@ The shared OMS language (:mod:`omsd.dialects.shared`) with the PCIx's own handle
 macros, ramp-table definitions, flash, the 32-bit operand check), its range table
 (:mod:`~omsd.dialects.pcix.ranges`), its framing (``text<LF><CR>``, nothing before it) and
 the engine as the PCIx manual describes it: soft limits per axis, for moves and jogs; slip
-tolerance 1 at the factory ("factory default value is 1"); a jog ends slip detection; RM folds
-the encoder too; ML/MT put VL, AC and VB back; the GS home-switch watch at every sensor look.
+tolerance 1 at the factory ("factory default value is 1"); its own lists of the commands that
+end position hold (HN's) and slip detection (IS's); RM folds the encoder too; ML/MT put VL, AC
+and VB back; the GS home-switch watch at every sensor look.
 """
 
 from __future__ import annotations
@@ -40,11 +41,21 @@ _MODULES = (gearing, motion, ramps, reports, servo, settings, stops)  # each fil
 #: reply, which a MAX-family client reads as text<LF><CR> with nothing before it)
 FRAMING = Framing(value=(b"", b"\n\r"), status=(b"", b"\n\r"), error=b"")
 
+#: HN: "For stepper axes with encoders, this mode will be canceled (as though via an HF command)
+#: if an CG, CX, HM, HR, MV, SO, SP command is entered, if a limit is encountered or the maximum
+#: allowable position error is executed." (LP, SA, ST and KL, the PC48's, are not in it.)
+HOLD_CANCELLED_BY = frozenset({"CG", "CX", "HM", "HR", "MV", "SO", "SP"})
+
+#: IS: "Slip detection are disabled if a ER, ET, HF, HM, HR, JG, LP, or TM command is entered or
+#: if a limit is encountered." (JF, "like the JG command", with JG; SA, ST and KL are not in it.)
+SLIP_CANCELLED_BY = frozenset({"ER", "ET", "HF", "HM", "HR", "JG", "LP", "TM"})
+
 OPTIONS = Options(
     slip_tolerance=1.0,
     soft_limit_per_axis=True,
     soft_limit_motions=frozenset({Motion.MOVE, Motion.JOG}),
-    jog_disables_slip_detection=True,
+    hold_cancelled_by=HOLD_CANCELLED_BY,
+    slip_cancelled_by=SLIP_CANCELLED_BY,
     remainder_folds_encoder=True,
     linear_moves_restore=True,
     home_loads_encoder=True,

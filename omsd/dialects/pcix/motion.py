@@ -325,13 +325,11 @@ def _so(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _op_so(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     stop = float(math.trunc(axis.to_motor(op.args[0])))
     distance = abs(axis.to_motor(op.args[1]))
+    ex.cancel(axis, "SO")  # HN: "canceled ... if an CG, CX, HM, HR, MV, SO, SP command is entered"
     tick = ex.machine.clock.at_or_after(t)
     v0 = axis.velocity(tick)
     if v0 == 0.0:
         return None
-    if not axis.is_servo:
-        axis.hold = False  # HN: cancelled by ... SO
-        axis.in_position = True
     s = 1 if v0 > 0 else -1 if v0 < 0 else 0
     motion = axis.motion
     x = axis.position(tick)
@@ -359,7 +357,7 @@ def _op_so(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     return Wait("motion") if axis.moving else None
 
 
-def _timed_jog(axis: Axis, ms: int, tick: float) -> None:
+def _timed_jog(ex: Executor, axis: Axis, ms: int, tick: float) -> None:
     v = axis.direction * axis.vl
     v0 = axis.velocity(tick)
     pieces = [
@@ -367,7 +365,7 @@ def _timed_jog(axis: Axis, ms: int, tick: float) -> None:
         pf.cruise(v, ms / 1000.0),
         *pf.velocity_change(v, 0.0, axis.ac),
     ]
-    axis.slip_detect = False  # IS: disabled by ... TM
+    ex.cancel(axis, "TM")  # IS: "disabled if a ... TM command is entered"
     axis.home = None
     axis.begin(tick, pieces, Motion.JOG)
 
@@ -392,7 +390,7 @@ def _tm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     def start(g: SyncGroup, when: float) -> None:
         tick = machine.clock.at_or_after(when)
         for index, ms in times.items():
-            _timed_jog(machine.axes[index], ms, tick)
+            _timed_jog(machine.executor, machine.axes[index], ms, tick)
 
     group.action = start
     # "GO" ops: the executor starts members together and waits for each one's motion after
@@ -403,5 +401,5 @@ def _tm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @executes("TM")
 def _op_tm(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
-    _timed_jog(axis, op.args[0], ex.machine.clock.at_or_after(t))
+    _timed_jog(ex, axis, op.args[0], ex.machine.clock.at_or_after(t))
     return Wait("motion") if axis.moving else None

@@ -102,15 +102,7 @@ def _cg(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     defn = runnable_contour(ix)
     group = SyncGroup(set(range(len(machine.axes))))
 
-    def run(g: SyncGroup, when: float) -> None:
-        for index in defn.axes:
-            axis = machine.axes[index]
-            if not axis.is_servo:  # HN: stepper position maintenance "cancelled by CG, CX"
-                axis.hold = False
-                axis.in_position = True
-        run_contour(ix, defn, when)
-
-    group.action = run
+    group.action = lambda g, when: run_contour(ix, defn, when, "CG")
     items: list[tuple[Axis, Op]] = []
     for axis in machine.axes:
         items.append((axis, Op("CX", (), ix.cost(cell, axis), group)))

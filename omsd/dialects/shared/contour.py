@@ -118,16 +118,20 @@ def _cx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     machine = ix.machine
     defn = runnable_contour(ix)
     group = SyncGroup(set(range(len(machine.axes))))
-    group.action = lambda g, when: run_contour(ix, defn, when)
+    group.action = lambda g, when: run_contour(ix, defn, when, "CX")
     ix.enqueue([(a, Op("CX", (), ix.cost(cell, a), group)) for a in machine.axes])
 
 
-def run_contour(ix: Interpreter, defn: ContourDefinition, t: float) -> None:
+def run_contour(ix: Interpreter, defn: ContourDefinition, t: float, command: str) -> None:
+    """Start the contour on its axes, which ``command`` (CX, the PCIx's CG) ends the position
+    hold and slip detection of as the dialect says (the PCIx's HN: "CG, CX")."""
     from omsd.engine.contour import plan
 
     machine = ix.machine
     tick = machine.clock.at_or_after(t)
     axes = [machine.axes[i] for i in defn.axes]
+    for a in axes:
+        machine.executor.cancel(a, command)
     here = {a.index: a.position(tick) for a in axes}
     decel = min(a.ac for a in axes)
     p = plan(defn, here, decel)
