@@ -44,13 +44,24 @@ def _am(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.mode = "AM"
 
 
-@handles("HH", "HL", "MO", "HF", "HN", "IS", "ET")
+@handles("MO", "HF", "HN", "IS", "ET")
 def simple(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """Single-axis commands with no operand that queue one op on the current axis."""
     if cmd.fields:
         raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
     axis = ix.axis
     ix.enqueue([(axis, Op(cmd.mnemonic, (), ix.cost(cell, axis)))])
+
+
+@handles("HH", "HL")
+def _home_level(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """The home switch level, which the encoder home mode has no use for (PC48 §6.18 and VS4
+    HE: "The external enable is low true, i.e. the HH and HL commands are not valid in this
+    mode"): a command error there, as for the PCIx's HH/HL and every command the queue tables
+    call "Not valid" in a mode. The mode is the one HE/HS (immediate) left when HH/HL is read."""
+    if ix.axis.home_encoder:
+        raise CommandFailed(ErrorKind.NOT_VALID_IN_MODE)
+    simple(ix, cmd, cell, t)
 
 
 @handles("LN", "LF", "SL", "SF")
