@@ -4,6 +4,9 @@ gaps, each pinned with the manual's words.
 * HH and HL are a command error in the encoder home mode: "The external enable is low true,
   i.e. the HH and HL commands are not valid in this mode" (PC48 §6.18 HE; the VS4's HE the
   same). They were accepted silently.
+* HM and HR load the position counter only, on a board with encoders too (kept, now pinned):
+  "The position counter will be initialized to the position supplied as a parameter" (§6.11),
+  where LP names both registers.
 """
 
 from __future__ import annotations
@@ -15,6 +18,8 @@ from omsd.board.events import ErrorKind
 from omsd.board.harness import Harness
 from omsd.link import DriverLink
 from omsd.models import get_model
+
+from .support import number
 
 
 @pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PC46-2E"])
@@ -43,3 +48,31 @@ def test_hh_in_the_encoder_home_mode_is_a_hash_through_the_driver() -> None:
     link = DriverLink(Board(get_model("PC48-4E"), 0.0))
     link.from_host(b"AX HE HH WY", 0.0)
     assert link.to_host(0.0).data == b"#\nPC48 ver 3.00-4\n"
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PC46-2E"])
+def test_a_home_loads_the_position_counter_and_leaves_the_encoder(model: str) -> None:
+    """PC48 §6.11 HM: "The position counter will be initialized to the position supplied as a
+    parameter ... The axis will not stop at home, but will initialize the position counter when
+    the home switch becomes true"; HR "behaves exactly like the HM command" (the VS4's HM/HR and
+    the PC46 datasheet: "initialize the position counter" too). LP, by contrast, names both: "In
+    models with the encoder option, the parameter will be loaded into the encoder position
+    register and the parameter times the encoder ratio will be loaded into the position
+    counter" (§6.7). So the encoder (RE) keeps counting the carriage through a home (the
+    PCIx's HR, "the position and encoder counters are loaded", is another board), and position
+    maintenance afterwards holds the counter's position, with no correction toward RE = RP."""
+    h = Harness(model)
+    h.send("AX VL1000 LP-200 HM0 ")  # the encoder is 200 behind the carriage; home at 1000
+    h.until(5.0)
+    assert number(h.send("RP")) == 0
+    re = number(h.send("RE"))
+    assert re in (800, 801)  # where the home's deceleration left the carriage, less 200: not 0
+    h.send("HV1000 HG10 HN ")
+    h.until(8.0)
+    assert (number(h.send("RP")), number(h.send("RE"))) == (0, re)  # nothing to correct
+    h.send("HF MA3000 GO ")
+    h.until(15.0)
+    h.send("HR7 ")  # down into the window from above: its top step, 1099
+    h.until(25.0)
+    assert number(h.send("RP")) == 7
+    assert number(h.send("RE")) in (899, 900)  # the carriage's count, 200 behind: not 7
