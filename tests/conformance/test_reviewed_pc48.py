@@ -7,6 +7,9 @@ gaps, each pinned with the manual's words.
 * HM and HR load the position counter only, on a board with encoders too (kept, now pinned):
   "The position counter will be initialized to the position supplied as a parameter" (§6.11),
   where LP names both registers.
+* RC between the end of a profile and the sample tick that makes the axis idle (up to one
+  sample) is the stopped stage's, "the acceleration at the beginning of a ramp" (§6.13), as
+  before the end and after that tick; it was 0.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from omsd.board.harness import Harness
 from omsd.link import DriverLink
 from omsd.models import get_model
 
-from .support import number
+from .support import frame, number
 
 
 @pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PC46-2E"])
@@ -76,3 +79,27 @@ def test_a_home_loads_the_position_counter_and_leaves_the_encoder(model: str) ->
     h.until(25.0)
     assert number(h.send("RP")) == 7
     assert number(h.send("RE")) in (899, 900)  # the carriage's count, 200 behind: not 7
+
+
+@pytest.mark.parametrize("model", ["PC48-4", "VS4-040"])
+@pytest.mark.parametrize("ramp", ["", "PN "])
+def test_rc_after_the_profile_ends_is_the_stopped_stages(model: str, ramp: str) -> None:
+    """PC48 §6.13 RC (the VS4's the same): "When the stage is stopped, the parameter returned
+    will be the acceleration at the beginning of a ramp." A move's profile ends between two
+    sample ticks; until the next tick the axis is not yet idle, but the stage is stopped (RP
+    reads the end, RV 0). RC read 0 there, for up to one sample, while just before the end
+    (the end of the ramp down, where the deceleration is the beginning of the ramp's, "the same
+    in reverse") and from the tick on it reads AC; a poll then sees AC throughout."""
+    h = Harness(model)
+    h.send(f"{ramp}AX VL1000 AC10000 MR1000 GO ")
+    axis = h.axis("X")
+    end = axis.traj.end_time
+    rate = get_model(model).sample_rate
+    assert end * rate != int(end * rate), "precondition: the end falls between two ticks"
+    h.until(end + 1e-6)
+    assert axis.motion.name != "IDLE", "precondition: before the done tick"
+    assert h.send("RP RV") == frame("1000") + frame("0")
+    assert h.send("RC") == frame("10000")
+    h.until(end + 1.0 / rate)
+    assert axis.motion.name == "IDLE"
+    assert h.send("RC") == frame("10000")

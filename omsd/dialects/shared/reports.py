@@ -87,10 +87,12 @@ def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
     at the beginning of a ramp. When the stage is running at programmed speed ... the
     acceleration at the end of the ramp.\"" The ramp is the one the axis ran: linear for a jog
     in any ramp mode. "While a contour is executing, the value computed to generate the
-    appropriate lead in will be returned", for the whole contour."""
+    appropriate lead in will be returned", for the whole contour. A profile that has run out
+    (its end is before the sample tick that makes the axis idle) is a stage stopped, as RP and
+    RV already say: the acceleration at the beginning of a ramp, not the 0 of no ramp at all."""
     if axis.motion is Motion.CONTOUR:
         return ix.contour_lead.get(axis.index, 0.0)
-    if axis.motion is not Motion.IDLE:
+    if axis.motion is not Motion.IDLE and axis.traj.moving_at(t):
         a = abs(axis.acceleration(t))
         if a > 0.0 or axis.velocity(t) == 0.0:
             return a
