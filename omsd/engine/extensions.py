@@ -57,8 +57,9 @@ class Options:
     #: the commands that end position maintenance (HN) on a stepper with an encoder, and those
     #: that end slip detection (IS), as the manual names them (HF and a limit end both on every
     #: board). A command counts when it executes from the axis's queue (a contour when it
-    #: starts), by its own name, except that JF is looked up as JG and a stop as ``ST`` (ST, SA,
-    #: SD, SI) or, if it kills, ``KL`` (KL, KS, Control-D). The defaults: :data:`PC48_CANCELS`.
+    #: starts), by its own name (a kill home as KM or KR), except that JF is looked up as JG and
+    #: a stop as ``ST`` (ST, SA, SD, SI) or, if it kills, ``KL`` (KL, KS, Control-D). The
+    #: defaults: :data:`PC48_CANCELS`.
     hold_cancelled_by: frozenset[str] = PC48_CANCELS
     slip_cancelled_by: frozenset[str] = PC48_CANCELS
     #: the remainder op folds the encoder position as well as the counter

@@ -126,7 +126,11 @@ def _home(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # supplied ... The axis will not stop at home, but ... decelerates to a stop."
     position, kill, direction = op.args
     tick = ex.machine.clock.at_or_after(t)
-    ex.cancel(axis, "HM" if direction > 0 else "HR")
+    # a home ends what its dialect's lists say by its own name: KM and KR are in none of them
+    # (the PC48's HN/IS "LP, HM, HR, SA, ST or KL"; the PCIx's pages), so a kill home leaves
+    # position hold and slip detection on
+    name = ("KM", "KR") if kill else ("HM", "HR")
+    ex.cancel(axis, name[0] if direction > 0 else name[1])
     v0 = axis.velocity(tick)
     v = direction * axis.vl
     axis.direction = direction

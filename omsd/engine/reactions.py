@@ -9,6 +9,8 @@ due (:meth:`omsd.engine.machine.Machine.advance`).
 
 from __future__ import annotations
 
+import math
+
 from omsd.engine.axis import Axis
 from omsd.engine.backlash import take_up_backlash
 from omsd.engine.events import LimitEvent, ServoTripEvent, SlipEvent
@@ -51,7 +53,7 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
             _limit(ex, axis, direction, t)
     if axis.home is not None and axis.motion is Motion.HOME:
         _look_for_home(axis, t)
-    if axis.slip_detect and abs(axis.slip_error(t)) > axis.es:
+    if axis.slip_detect and abs(_slip_seen(axis, t)) > axis.es:
         axis.slip_detect = False
         axis.slipped = True
         machine.registers.status |= ENC_S | DON_S
@@ -65,6 +67,20 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
             ex.stopped_at_once(axis, t)
     if axis.hold and axis.motion is Motion.IDLE:
         ex.check_hold(axis, t)
+
+
+def _slip_seen(axis: Axis, t: float) -> float:
+    """The slip error a look finds. A look on a home search's way that has not stopped it (the
+    PC48 family's KM/KR keep slip detection on) comes at a switch's edge, mid-step: there the
+    board compares whole counts, the encoder's and the one the pulses make, not the pulses'
+    continuous count (which would be up to half a count off a whole encoder count, a slip at the
+    PC48's tolerance of 0). A stalled carriage's looks, at the predicted crossings of the
+    tolerance (``sensing._slip_crossing``), keep the continuous error they were predicted with."""
+    error = axis.slip_error(t)
+    if axis.motion is Motion.HOME and axis.stall_phys is None:
+        encoder = axis.encoder(t)
+        return encoder - math.floor(encoder - error + 0.5)
+    return error
 
 
 def _look_for_home(axis: Axis, t: float) -> None:
@@ -84,6 +100,8 @@ def _look_for_home(axis: Axis, t: float) -> None:
     axis.home = None
     if home.kill:
         axis.halt(t)  # "The position counter is not cleared or reset."
+        if axis.hold:  # (hold kept through it) what is held is where the pulses stopped
+            axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
         return
     axis.load_counter(t, home.position)
     if axis.has_encoder and axis.servo is None and axis.host.options.home_loads_encoder:

@@ -158,3 +158,24 @@ def test_the_pc48_and_vs4_keep_their_one_list(model: str, command: str, ends: bo
     h.send(command)
     h.run(limit=5.0)
     assert h.query("AX EA")[3:5] == (b"DD" if ends else b"EE")
+
+
+@pytest.mark.parametrize(("start", "command"), [(0, "KM;"), (3000, "KR;")])
+def test_a_pcix_kill_home_leaves_hold_and_slip_detection_on(start: int, command: str) -> None:
+    """KM and KR are in neither PCIx list, and the KM page ("kill motion immediately; i.e.
+    without using a deceleration ramp. The position counter will not be reset or cleared") says
+    nothing of hold or slip: as on the PC48 (tests/conformance/test_reviewed_pc48.py). What is
+    held after one is where the pulses stopped, not where the axis was held before it (the
+    home switch of the default world is around 1000: KM from 0, KR from 3000)."""
+    h = Harness(MODEL)
+    h.send(f"AX;VL1000;MA{start};GO;{HOLD_AND_SLIP}")
+    h.run()
+    assert ea(h) == "EE"
+    h.send(command)
+    h.advance(4.0)
+    assert ea(h) == "EE"
+    stopped = number(h.query("RP;"))
+    assert stopped != start and abs(stopped - 1000) < 100  # it found home
+    h.advance(3.0)
+    assert number(h.query("RP;")) == stopped  # held there, not driven back
+    assert h.errors() == []

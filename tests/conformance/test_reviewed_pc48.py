@@ -10,6 +10,9 @@ gaps, each pinned with the manual's words.
 * RC between the end of a profile and the sample tick that makes the axis idle (up to one
   sample) is the stopped stage's, "the acceleration at the beginning of a ramp" (§6.13), as
   before the end and after that tick; it was 0.
+* KM and KR leave position hold and slip detection on: "Hold and slip detection are disabled
+  if an LP, HM, HR, SA, ST or KL command is entered or if a limit is encountered" (§6.15 HN,
+  §6.16 IS) names neither, and their own pages say nothing of it. They switched both off.
 """
 
 from __future__ import annotations
@@ -17,12 +20,12 @@ from __future__ import annotations
 import pytest
 
 from omsd.board import Board
-from omsd.board.events import ErrorKind
+from omsd.board.events import ErrorKind, SlipEvent
 from omsd.board.harness import Harness
 from omsd.link import DriverLink
 from omsd.models import get_model
 
-from .support import frame, number
+from .support import frame, number, status_frame
 
 
 @pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PC46-2E"])
@@ -103,3 +106,61 @@ def test_rc_after_the_profile_ends_is_the_stopped_stages(model: str, ramp: str) 
     h.until(end + 1.0 / rate)
     assert axis.motion.name == "IDLE"
     assert h.send("RC") == frame("10000")
+
+
+KILL_HOME_MODELS = ["PC48-4E", "VS4-040", "PC46-2E"]
+
+
+@pytest.mark.parametrize("model", KILL_HOME_MODELS)
+def test_km_and_kr_leave_hold_and_slip_detection_on(model: str) -> None:
+    """PC48 §6.15 HN and §6.16 IS (the VS4's the same words): "Hold and slip detection are
+    disabled if an LP, HM, HR, SA, ST or KL command is entered or if a limit is encountered."
+    KM ("will find home and stop generating pulses immediately ... The position counter is not
+    cleared or reset") and KR are not in the list, and their pages say nothing of hold or slip.
+    EA: char 4 "E Slip detection enabled", char 5 "E Position maintenance enabled", char 7 "P
+    Position Maintenance within deadband". What is held after a KM is where it stopped the
+    pulses, not where the axis was held before it. HM, in the list, still switches both off."""
+    h = Harness(model)
+    h.send("AX VL1000 HV1000 HG10 HN IS KM ")  # from 0 to the home switch at 1000
+    h.until(3.0)
+    assert h.send("EA") == status_frame("EENPHN")
+    h.until(6.0)
+    assert (number(h.send("RP")), number(h.send("RE"))) == (1000, 1000)  # held there, not at 0
+    h.send("MR500 GO ")
+    h.until(8.0)
+    h.send("KR ")  # down to the top of the window (1099 from above)
+    h.until(12.0)
+    assert h.send("EA") == status_frame("EENPHN")
+    assert h.errors() == []
+    h.send("HM ")
+    h.until(20.0)
+    assert h.send("EA")[:5] == b"\n\r\rDD"
+
+
+@pytest.mark.parametrize("model", KILL_HOME_MODELS)
+def test_a_kill_home_leaving_the_home_window_is_no_slip(model: str) -> None:
+    """Slip detection on through a KR that starts inside the home window (the look at the
+    window's edge, mid-step): no slip at the power-up tolerance of 0, as in a move (ES: "the
+    tolerance before slip or stall is flagged"); detection stays on ("If a slip occurs, slip
+    detection must be re-enabled": none occurred)."""
+    h = Harness(model)
+    h.send("AX VL1000 MA1000 GO ")
+    h.until(5.0)
+    h.send("IS KR ")  # away from home below: it runs on
+    h.until(8.0)
+    assert h.send("EA") == status_frame("EDNNNN")
+    assert not [e for e in h.events() if isinstance(e, SlipEvent)]
+
+
+def test_a_stall_during_a_kill_home_is_flagged() -> None:
+    """IS: "enables the PC48 to interrupt the host on slip or stall detection"; through a KM
+    too, now that it leaves detection on."""
+    h = Harness("PC48-4E")
+    h.send("AX VL1000 ES10 IS KM ")
+    h.until(0.5)
+    h.board.set_stall("X", True, h.t)
+    at = h.t
+    h.until(1.0)
+    (slip,) = [e for e in h.events() if isinstance(e, SlipEvent)]
+    assert slip.time - at == pytest.approx(0.011, abs=0.002)  # 10 counts at 1000 steps/s
+    assert h.send("EA") == status_frame("DDSNNN")
