@@ -32,8 +32,10 @@ for _letter in "XYZTUVRS":
 
 @handles("AA")
 def _aa(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    if cell.kind is Kind.QUEUED and ix.mode != "single":
-        # "AA,AM 2": a synchronizing no-op in every axis queue
+    if cell.kind is Kind.QUEUED:
+        # a synchronizing no-op in every axis queue: PC48 "AA,AM 2" (its single-axis cell is
+        # immediate); PCIx "AA; AX – AT 1", "AA; AA-AM 1", "it places synchronization entries
+        # in all axis queues" whichever mode it is typed in
         slots = ix.cost(cell, ix.axis)
         ix.enqueue([(a, Op("NOP", (), slots)) for a in ix.machine.axes])
     ix.mode = "AA"
