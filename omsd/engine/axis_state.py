@@ -209,6 +209,17 @@ class AxisState:
 
             self.servo.set_gains(ServoGains())
 
+    @property
+    def base_velocity(self) -> float:
+        """The VB a linear move is built with: VB itself (a ramp clamps one above VL to VL),
+        but on a board whose model says so (the PCIx: "If ... the velocity value set with VL is
+        less than the previously set VB value, the initial velocity used at the start of a move
+        will be the VL value minus one") VL less that margin, when VB is above VL."""
+        margin = self.host.model.base_above_peak
+        if margin is not None and self.vb > self.vl:
+            return max(self.vl - margin, 0.0)
+        return self.vb
+
     # -- frames -------------------------------------------------------------------------------
 
     def position(self, t: float) -> float:

@@ -281,7 +281,7 @@ class Executor:
             distance = target - axis.position(tick)
             # (the kept profiles are a fast path: the straightforward board computes each)
             profile = pf.move_pieces if machine.fast_paths else pf.profile_pieces
-            pieces = profile(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
+            pieces = profile(distance, axis.vl, axis.ac, axis.base_velocity, axis.ramp)
             if distance:
                 axis.direction = 1 if distance > 0 else -1
             if axis.index in saved and restore:
@@ -306,12 +306,16 @@ class Executor:
         moving = [a for a in axes if dist[a.index] > 0]
         if not moving:
             return
-        lead = max(moving, key=lambda a: pf.move_time(dist[a.index], a.vl, a.ac, a.vb, a.ramp))
+        lead = max(
+            moving,
+            key=lambda a: pf.move_time(dist[a.index], a.vl, a.ac, a.base_velocity, a.ramp),
+        )
+        base = lead.base_velocity  # the lead's own start (PCIx: VL - 1 under a VB above VL)
         for a in moving:
             k = dist[a.index] / dist[lead.index]
             a.vl = lead.vl * k
             a.ac = lead.ac * k
-            a.vb = lead.vb * k
+            a.vb = base * k
 
     def arm_in(self, axis: Axis, target: float) -> None:
         """Schedule the armed interrupt of the move just started (PC48 §6.12 IN: "The test is

@@ -173,7 +173,7 @@ def _next_move(
     value = axis.to_motor(command.args[0])
     target = float(math.trunc(value)) if code in MOVE_TO else x + math.trunc(value)
     distance = target - x
-    course = kept_course(distance, axis.vl, axis.ac, axis.vb, axis.ramp)
+    course = kept_course(distance, axis.vl, axis.ac, axis.base_velocity, axis.ramp)
     if not course.pieces:
         return None
     return go, x, target, distance, course

@@ -516,6 +516,10 @@ def _pcix(name: str, axes: str, servo: str, encoders: str, description: str) -> 
         # VS: "time in 1 update rate second sample intervals"; the example's "assumes an update
         # rate of 1024" is the older boards' (the PCIx updates 2048 times a second)
         velocity_stream_rate=2048,
+        # VB: "If the VL command is used after the VB command and the velocity value set with
+        # VL is less than the previously set VB value, the initial velocity used at the start
+        # of a move will be the VL value minus one."
+        base_above_peak=1.0,
     )
 
 

@@ -203,6 +203,10 @@ class Model:
     # equation of PC48 §1.3 makes PN10 end at 0 %), 0.1 on the VS4, whose manual has only the
     # words, "down to as low as 10%" ("3 to 10 corresponding to 70% and 10%")
     parabolic_floor: float = 0.0
+    # where a linear move starts when VB is above VL: None = at VL (the PC48 family: VB is
+    # "less than the programmed velocity", nothing more said); the PCIx's 1: "the initial
+    # velocity used at the start of a move will be the VL value minus one"
+    base_above_peak: float | None = None
     # Reply framing: "surround" = <LF><CR>text<LF><CR> (<LF><CR><CR> for axis status), the
     # PC48/PC46/VS4 card; "trailing" = text<LF><CR>, as the PCIx and its MAX-family descendants
     # present it on a serial or network link (shared/interop/README.md)

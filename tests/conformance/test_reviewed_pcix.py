@@ -2,9 +2,13 @@
 
 * ``AA;`` typed in single-axis mode takes its queue unit in every axis queue ("AA; AX – AT 1";
   "it places synchronization entries in all axis queues"), as it does typed in AA/AM mode.
+* A VB above VL starts a linear move at VL minus one, a one-step ramp up to VL (the VB page);
+  the PC48, whose VB page has no such sentence, still starts it at VL.
 """
 
 from __future__ import annotations
+
+import pytest
 
 from omsd.board.harness import Harness
 
@@ -26,3 +30,40 @@ def test_aa_typed_in_single_axis_mode_takes_a_unit_in_every_axis_queue() -> None
     h.send("AA;")  # typed in AA mode: the same
     assert queues(h) == [busy[0] - 2, 800, 800, 800]
     assert h.errors() == []
+
+
+def number(reply: bytes) -> int:
+    return int(reply.strip(b"\n\r"))
+
+
+def test_a_base_velocity_above_vl_starts_a_move_at_vl_minus_one() -> None:
+    """VB: "If the VL command is used after the VB command and the velocity value set with VL
+    is less than the previously set VB value, the initial velocity used at the start of a move
+    will be the VL value minus one. This will result in a one-step acceleration ramp". ?VB
+    "returns the base (starting) velocity setting for the current axis as set by the VB
+    command": VB's own value. The ramp from 299 to 300 at AC1000 takes 1 ms."""
+    h = Harness("PCIX-040")
+    h.send("AX;VB500;VL300;AC1000;MR10000;GO;")
+    h.advance(0.0006)
+    assert number(h.send("RV;")) == 299  # (it was 300: VB clamped to VL)
+    assert number(h.send("RC;")) == 1000  # ramping: the one-step ramp's acceleration
+    h.advance(0.01)
+    assert (number(h.send("RV;")), number(h.send("RC;"))) == (300, 0)
+    assert h.send("?VB;") == b"vb500\n\r"
+    h.until(40.0)
+    assert number(h.send("RP;")) == 10000
+    e = Harness("PCIX-040")  # VL equal to VB is not "less than" it: the move starts at VB
+    e.send("AX;VB300;VL300;AC1000;MR10000;GO;")
+    e.advance(0.0006)
+    assert number(e.send("RV;")) == 300
+    assert h.errors() == [] and e.errors() == []
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040"])
+def test_the_older_boards_still_start_a_move_at_vl_under_a_vb_above_it(model: str) -> None:
+    """PC48 VB: "The parameter must be greater than zero and less than the programmed
+    velocity"; no word on a VL set below it afterwards: the move starts at VL."""
+    h = Harness(model)
+    h.send("AX VB500 VL300 AC1000 MR10000 GO ")
+    h.advance(0.0006)
+    assert number(h.send("RV")) == 300

@@ -97,9 +97,9 @@ def _current_acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
         if a > 0.0 or axis.velocity(t) == 0.0:
             return a
         shape = pf.LINEAR if axis.motion in _LINEAR_RAMPS else axis.ramp
-        up = pf.ramp_up(axis.vl, axis.ac, axis.vb, shape)
+        up = pf.ramp_up(axis.vl, axis.ac, axis.base_velocity, shape)
         return abs(up.a(up.duration))
-    up = pf.ramp_up(axis.vl, axis.ac, axis.vb, axis.ramp)
+    up = pf.ramp_up(axis.vl, axis.ac, axis.base_velocity, axis.ramp)
     return abs(up.a(0.0))
 
 
