@@ -268,7 +268,9 @@ PCIX_COMMANDS: dict[str, CommandSpec] = {
         # 5.4.2 power-up defaults
         _both("AP"),
         _both("RF"),
-        _both("RD"),  # "RD AX – AT Immediate" although it "places entries in all axis queues"
+        # "RD AX – AT Immediate" although it "places entries in all axis command queues": the
+        # command acts at once, its entries (no units given) set each axis when reached
+        _both("RD"),
         # 5.4.3 queue selection
         _c("AA", False, q(1), q(1)),  # "places synchronization entries in all axis queues"
         _both("AM"),

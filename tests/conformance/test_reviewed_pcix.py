@@ -4,6 +4,9 @@
   "it places synchronization entries in all axis queues"), as it does typed in AA/AM mode.
 * A VB above VL starts a linear move at VL minus one, a one-step ramp up to VL (the VB page);
   the PC48, whose VB page has no such sentence, still starts it at VL.
+* RD restores the power-up defaults through the axis queues ("This command places entries in
+  all axis command queues to set up the motion profile parameters"): an axis takes them when
+  its queue reaches the entry, after the moves queued before RD.
 """
 
 from __future__ import annotations
@@ -67,3 +70,25 @@ def test_the_older_boards_still_start_a_move_at_vl_under_a_vb_above_it(model: st
     h.send("AX VB500 VL300 AC1000 MR10000 GO ")
     h.advance(0.0006)
     assert number(h.send("RV")) == 300
+
+
+def test_rd_restores_the_defaults_through_every_axis_queue() -> None:
+    """RD "restores the motion parameters using power-up defaults"; "NOTE: This command places
+    entries in all axis command queues to set up the motion profile parameters." Its table
+    ("RD AX – AT Immediate") gives no units: RQ is as before. X has two moves queued at VL1000
+    when RD arrives: the second still runs at 1000 and X reads its saved VL5000 only after
+    both; Y, whose queue is empty, has its saved value at once."""
+    h = Harness("PCIX-040")
+    h.send("AX;VL5000;AY;VL5000;AP;VL2000;")
+    h.send("AX;VL1000;MR1000;GO;MR2000;GO;")
+    before = queues(h)
+    h.send("RD;")
+    assert queues(h) == before
+    assert h.send("AX;?VL;") == b"vl1000\n\r"  # (it was vl5000: RD acted at once)
+    assert h.send("AY;?VL;") == b"vl5000\n\r"
+    h.advance(1.5)  # the second move, MR2000, at the VL queued before RD
+    assert h.send("AX;RV;") == b"1000\n\r"  # (it was 5000)
+    h.advance(3.0)
+    assert h.send("AX;?VL;RP;") == b"vl5000\n\r3000\n\r"
+    assert queues(h) == [800, 800, 800, 800]
+    assert h.errors() == []

@@ -215,10 +215,24 @@ def scurve_ramp(board: Core, profile: int) -> pf.RampShape | None:
 
 
 def apply(board: Core, saved: dict[str, Any]) -> list[str]:
-    """Load a saved parameter set (RD, power-up) over the factory values already in place.
+    """Load a saved parameter set (power-up) over the factory values already in place.
     Returns the values skipped because they do not fit, each as ``where: expected ..., got
     ...`` (empty when everything was used)."""
     problems: list[str] = []
+    apply_tables(board, saved, problems)
+    axes = saved.get("axes")
+    if isinstance(axes, dict):
+        for axis in board.axes:
+            apply_axis(board, axis, saved, problems)
+    elif "axes" in saved:
+        problems.append(f"axes: expected an object, got {_kind(axes)}")
+    for axis in board.axes:
+        axis.aux = axis.aux_default_high
+    return problems
+
+
+def apply_tables(board: Core, saved: dict[str, Any], problems: list[str]) -> None:
+    """The board's part of a saved set: the custom ramp tables and S-curve profiles."""
     tables = saved.get("tables")
     if isinstance(tables, dict):
         for key, points in tables.items():
@@ -238,19 +252,18 @@ def apply(board: Core, saved: dict[str, Any]) -> list[str]:
                 problems.append(f"scurves.{key}: expected an S-curve, got {_kind(values)}")
     elif "scurves" in saved:
         problems.append(f"scurves: expected an object, got {_kind(scurves)}")
+
+
+def apply_axis(board: Core, axis: Axis, saved: dict[str, Any], problems: list[str]) -> None:
+    """One axis's part of a saved set (``axes.X``), if the set has one."""
     axes = saved.get("axes")
-    if isinstance(axes, dict):
-        for axis in board.axes:
-            p = axes.get(axis.letter)
-            if isinstance(p, dict):
-                _apply_axis(axis, p, board, f"axes.{axis.letter}", problems)
-            elif axis.letter in axes:
-                problems.append(f"axes.{axis.letter}: expected an object, got {_kind(p)}")
-    elif "axes" in saved:
-        problems.append(f"axes: expected an object, got {_kind(axes)}")
-    for axis in board.axes:
-        axis.aux = axis.aux_default_high
-    return problems
+    if not isinstance(axes, dict):
+        return
+    p = axes.get(axis.letter)
+    if isinstance(p, dict):
+        _apply_axis(axis, p, board, f"axes.{axis.letter}", problems)
+    elif axis.letter in axes:
+        problems.append(f"axes.{axis.letter}: expected an object, got {_kind(p)}")
 
 
 def factory(board: Core) -> None:
@@ -259,6 +272,11 @@ def factory(board: Core) -> None:
     board.ramp_tables.clear()
     board.scurves.clear()
     for axis in board.axes:
-        axis.factory_parameters()
-        axis.travel_limits = None
-        axis.invalidate()
+        factory_axis(axis)
+
+
+def factory_axis(axis: Axis) -> None:
+    """One axis's part of :func:`factory`."""
+    axis.factory_parameters()
+    axis.travel_limits = None
+    axis.invalidate()

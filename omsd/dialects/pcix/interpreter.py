@@ -5,8 +5,8 @@
   (MX), at most :data:`MAX_MACRO_DEPTH` deep.
 * A custom ramp table being defined (DAR ... DAE): "until the DAE command is entered, only the
   DAB and DAE commands will be valid".
-* Flash (§5.4.2, :mod:`~omsd.dialects.pcix.flash`): at power-up (and RD) the saved defaults over
-  the factory values, and the permanent macros.
+* Flash (§5.4.2, :mod:`~omsd.dialects.pcix.flash`): at power-up (and RD, each axis through
+  its queue) the saved defaults over the factory values, and the permanent macros.
 * §5.1: "numeric parameters must be within the range of a 32-bit signed integer"
   (:func:`check_32_bit`, the dialect's field check).
 """
@@ -19,7 +19,9 @@ from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.pcix import flash
 from omsd.dialects.pcix.macros import MacroCapture, MacroStore
 from omsd.dialects.registry import Dialect
+from omsd.engine.axis import Axis
 from omsd.engine.machine import Machine
+from omsd.engine.queue import Op
 from omsd.protocol.errors import ErrorKind
 from omsd.protocol.lexer import Command, Token
 
@@ -106,8 +108,9 @@ class PcixInterpreter(Interpreter):
     # -- flash ----------------------------------------------------------------------------------
 
     def load_flash(self) -> list[str]:
-        """Power-up and RD: the saved defaults over the factory values, and the permanent
-        macros. Returns the saved values skipped because they do not fit (``flash.apply``)."""
+        """Power-up: the saved defaults over the factory values, and the permanent macros
+        (RD: :meth:`restore_defaults`). Returns the saved values skipped because they do not
+        fit (``flash.apply``)."""
         machine = self.machine
         flash.factory(machine)
         problems: list[str] = []
@@ -117,6 +120,31 @@ class PcixInterpreter(Interpreter):
             axis.aux = axis.aux_default_high
         self.macros.load_permanent(machine.flash_macros)
         return problems
+
+    def restore_defaults(self) -> None:
+        """RD: "restores the motion parameters using power-up defaults"; "This command places
+        entries in all axis command queues to set up the motion profile parameters", so each
+        axis takes the saved values (the factory ones where AP was never used) when its queue
+        reaches the entry, after what was queued before RD (an entry takes no units: the
+        queue table says "RD AX – AT Immediate", "RD AA-AM Immediate"). The values are those
+        in flash when RD is received. What has no axis queue, the custom ramp tables and
+        S-curve profiles (DAR and AJ act at once) and the permanent macros, is restored at
+        once."""
+        machine = self.machine
+        saved = machine.flash_defaults if machine.flash_matches() else None
+
+        def restore(axis: Axis, t: float) -> None:
+            flash.factory_axis(axis)
+            if saved is not None:
+                flash.apply_axis(machine, axis, saved, [])
+            axis.aux = axis.aux_default_high
+
+        self.enqueue([(a, Op("SET", ("RD", restore), 0)) for a in machine.axes])
+        machine.ramp_tables.clear()
+        machine.scurves.clear()
+        if saved is not None:
+            flash.apply_tables(machine, saved, [])
+        self.macros.load_permanent(machine.flash_macros)
 
     def write_flash(self, defaults: dict[str, Any] | None = None) -> None:
         """AP / ADH / ADL (``defaults`` given) and PT: write flash (the permanent macros with

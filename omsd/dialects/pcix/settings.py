@@ -46,8 +46,8 @@ def _ap(ix: PcixInterpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("RD")
 def _rd(ix: PcixInterpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "restores the motion parameters using power-up defaults" (the factory values where AP
-    was never used)."""
-    ix.load_flash()
+    was never used), through every axis queue (``PcixInterpreter.restore_defaults``)."""
+    ix.restore_defaults()
 
 
 @handles("RF")
