@@ -18,7 +18,7 @@ contour queue. :func:`plan` turns it into one trajectory per contour axis when C
   contain at least a short linear segment just prior to the CE command to initialize the
   parameters for the deceleration"); CK: "the pulses will stop abruptly".
 
-AN/AF/BL/BH inside the definition happen at their place on the path.
+AN/AF/BL/BH (and the PCIx's ID) inside the definition happen at their place on the path.
 """
 
 from __future__ import annotations
@@ -42,8 +42,8 @@ class Arc:
 
 @dataclass(frozen=True)
 class Output:
-    kind: str  # "aux" or "bit"
-    target: int  # axis index or bit number
+    kind: str  # "aux", "bit" or "done" (the PCIx's ID in a contour)
+    target: int  # axis index, bit number, or (done) the mask of the contour axes
     low: bool
 
 

@@ -145,6 +145,9 @@ def on_outputs(ex: Executor, axis: Axis, t: float) -> None:
         _, (what, target, low) = axis.outputs.pop(0)
         if what == "aux":
             ex.set_aux(machine.axes[target], not low, t)
+        elif what == "done":
+            done = [a for a in machine.axes if target >> a.index & 1]
+            machine.set_done(done, t, interrupt=True)
         else:
             machine.set_output(target, low=low, t=t)
     axis.invalidate()

@@ -144,7 +144,6 @@ def run_contour(ix: Interpreter, defn: ContourDefinition, t: float, command: str
     lead = axes[0]
     for offset, out in p.outputs:
         when = machine.clock.at_or_after(tick + offset)
-        kind = "aux" if out.kind == "aux" else "bit"
-        lead.outputs.append((when, (kind, out.target, out.low)))
+        lead.outputs.append((when, (out.kind, out.target, out.low)))
     lead.outputs.sort(key=lambda item: item[0])
     lead.invalidate()

@@ -21,6 +21,16 @@ def _task_axes(ix: Interpreter) -> list[int]:
 @handles("ID")
 def _id(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     machine = ix.machine
+    if ix.contour is not None:
+        # the PCIx's "ID; AA/CD 1": one unit of the contour queue; the done flags of the contour
+        # axes are set (and the host interrupted) when the contour reaches it, as AN/AF/BL/BH
+        # inside a definition act at their place on the path
+        from omsd.engine.contour import Output  # (loaded: a contour is being defined)
+
+        mask = sum(1 << i for i in ix.contour.axes)
+        if not ix.contour.add(Output("done", mask, False), ix.cost(cell, ix.axis)):
+            raise CommandFailed(ErrorKind.CONTOUR_FULL)
+        return
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("ID", (), ix.cost(cell, ix.axis)))])
         return
