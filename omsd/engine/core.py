@@ -270,9 +270,14 @@ class Core:
         return self.init_until is not None and self.now < self.init_until
 
     def status_register(self, now: float) -> int:
-        """The status register without the side effect of a read."""
+        """The status register without the side effect of a read. IBF_S "indicates a character
+        is available in the input buffer" (PC48 Table 3-8): a reply or echoed characters not yet
+        taken, not an event (a done, limit, slip or command error puts no byte on the data
+        port; it is in the other bits)."""
         return self.registers.compose_status(
-            self.initializing, self.front.room(), bool(self._output)
+            self.initializing,
+            self.front.room(),
+            any(type(item) is Reply and item.data for item in self._output),
         )
 
     # -- general purpose I/O ------------------------------------------------------------------
