@@ -28,6 +28,7 @@ from omsd.dialects.words import SyntaxTable, syntax, words_of
 from omsd.engine.axis import Axis
 from omsd.engine.machine import Machine
 from omsd.engine.queue import Op
+from omsd.engine.states import Motion
 from omsd.models.spec import Cell, Kind
 from omsd.protocol.errors import ErrorKind
 from omsd.protocol.lexer import Command, Garbage, Lexer, Token
@@ -187,24 +188,34 @@ class Interpreter(Operands, LoopStacks):
     def kill_all(self, t: float) -> None:
         """KL and Control-D: "flush the command queue and terminate pulse generation of all axes
         immediately" (PC48 §6.9); also leaves contour definition and the WQ wait."""
+        # what each axis was doing, for its stop to read (Executor.stopped_at_once): the pulses
+        # stop here, before the queued stop runs
+        stopped = {axis.index: axis.motion for axis in self.machine.axes}
         for axis in self.machine.axes:
             axis.halt(t)
             axis.aux_timer = None
-        self.stop(list(self.machine.axes), t, kill=True)
+        self.stop(list(self.machine.axes), t, kill=True, stopped=stopped)
         self.contour = None
         self.wq = None
 
     def stop(
-        self, axes: list[Axis], t: float, kill: bool = False, cell: Cell | None = None
+        self,
+        axes: list[Axis],
+        t: float,
+        kill: bool = False,
+        cell: Cell | None = None,
+        stopped: dict[int, Motion] | None = None,
     ) -> None:
-        """Flush the axes' queues and queue their stop (a kill stops the pulses at once)."""
+        """Flush the axes' queues and queue their stop (a kill stops the pulses at once);
+        ``stopped``: the motion of each axis whose pulses were stopped already (KL)."""
         machine = self.machine
         for axis in axes:
             machine.executor.flush(axis, t)
         for axis in axes:
             # "Flush + 2" (PC48); the PCIx's tables give their own numbers (+PA, +settle)
             slots = self.cost(cell, axis) if cell is not None and cell.kind is Kind.FLUSH else 2
-            axis.queue.append(Op("STOP", (kill,), slots, source=machine.input_source))
+            was = stopped.get(axis.index) if stopped is not None else None
+            axis.queue.append(Op("STOP", (kill, was), slots, source=machine.input_source))
         self.mt_blocked = False
 
     # -- the main loop --------------------------------------------------------------------------

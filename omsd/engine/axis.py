@@ -82,6 +82,7 @@ class Axis(AxisState):
         self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
         self.home = None
+        self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
         self.invalidate()
         moved(self, t, None, None)
 
@@ -98,6 +99,7 @@ class Axis(AxisState):
         if v == 0.0:
             self.halt(t)
             return
+        self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
         base = 0.0
         if self.motion is _MOVE and self.traj.pieces:
             last = self.traj.pieces[-1]

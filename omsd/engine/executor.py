@@ -373,14 +373,19 @@ class Executor:
         axis.in_position = True
         axis.invalidate()
 
-    def stopped_at_once(self, axis: Axis, t: float) -> None:
+    def stopped_at_once(self, axis: Axis, t: float, stopped: Motion) -> None:
         """A stop that left the axis at rest at once (a kill, a slip kill, a stop with no speed
-        to ramp down from) ends its motion as a motion's end does: in position, and a hold the
-        stop left on (the PCIx's: neither of its lists names a stop) holds where the axis is,
-        not where it was before the motion."""
+        to ramp down from) ends the motion it stopped, ``stopped``, as a motion's end does: in
+        position, and a hold the stop left on (the PCIx's: neither of its lists names a stop)
+        holds where a commanded motion was stopped, not where the axis was before it. An axis
+        at rest, or the hold's own correction, keeps the goal it had: the hold goes on toward
+        it (a kill of a standing axis does not move what is held)."""
         axis.in_position = True
         if axis.hold:
-            axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
+            if stopped is not Motion.IDLE and stopped is not Motion.HOLD:
+                axis.hold_goal = axis.track_enc + axis.ratio * (
+                    axis.position(t) - axis.track_counter
+                )
             self.check_hold(axis, t)
 
     def cancel(self, axis: Axis, command: str) -> None:

@@ -172,19 +172,30 @@ def _index_points(axis: Axis, direction: int) -> tuple[float, ...]:
 
 
 def _stop(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
-    kill = bool(op.args and op.args[0])
+    # args: kill, and the motion a kill whose pulses stopped before this op ran had stopped
+    # (KL, Control-D: Interpreter.kill_all), else None: what the axis is doing now
+    kill, was = op.args
+    stopped = was if was is not None else axis.motion
     ex.cancel(axis, "KL" if kill else "ST")
     axis.home = None
+    if stopped is Motion.HOLD and axis.hold:
+        # the hold's own correction, of a hold the stop leaves on (the PCIx's lists name no
+        # stop): it goes on toward the same goal; a kill stops the pulses and the hold, still
+        # on, starts them again
+        if kill:
+            axis.halt(t)
+            ex.check_hold(axis, t)
+        return None
     if kill:
         axis.halt(t)
-        ex.stopped_at_once(axis, t)
+        ex.stopped_at_once(axis, t, stopped)
         return None
     tick = ex.machine.clock.at_or_after(t)
     if axis.motion is Motion.IDLE:
         return None
     axis.decelerate(tick)
     if not axis.moving:
-        ex.stopped_at_once(axis, tick)
+        ex.stopped_at_once(axis, tick, stopped)
         return None
     return Wait("motion")
 

@@ -61,10 +61,11 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
         if axis.slip_kill:
             # "the PCIx will kill motion on the axis that slipped as though a KL command had been
             # issued to the axis" (TN)
+            stopped = axis.motion
             axis.halt(t)
             ex.flush(axis, t)
             ex.cancel(axis, "KL")
-            ex.stopped_at_once(axis, t)
+            ex.stopped_at_once(axis, t, stopped)
     if axis.hold and axis.motion is Motion.IDLE:
         ex.check_hold(axis, t)
 

@@ -179,3 +179,44 @@ def test_a_pcix_kill_home_leaves_hold_and_slip_detection_on(start: int, command:
     h.advance(3.0)
     assert number(h.query("RP;")) == stopped  # held there, not driven back
     assert h.errors() == []
+
+
+def corrected_after_a_slip() -> Harness:
+    """X holding at encoder 0 after a slip of 300 steps was corrected: the position counter
+    300 ahead of the encoder (the correction's pulses)."""
+    h = Harness(MODEL)
+    h.send("AX;HV100;HG10;HD0;HN;")
+    h.run()
+    h.board.inject_slip("X", -300, h.t)
+    h.advance(20.0)
+    assert (number(h.query("RP;")), number(h.query("RE;"))) == (300, 0)
+    return h
+
+
+@pytest.mark.parametrize("command", ["KL;", "ST;", "SA;"])
+def test_a_pcix_stop_of_a_holding_axis_at_rest_moves_nothing(command: str) -> None:
+    """A stop leaves the PCIx's hold on (neither list names it), and an axis at rest has nothing
+    to stop: what is held stays where it was (a kill used to move the goal by the correction
+    the hold had made, and the hold drove the carriage 300 steps away)."""
+    h = corrected_after_a_slip()
+    h.send(command)
+    h.advance(20.0)
+    assert (number(h.query("RP;")), number(h.query("RE;"))) == (300, 0)
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize("command", ["KL;", "ST;", "SA;"])
+def test_a_pcix_stop_during_a_hold_correction_keeps_the_held_position(command: str) -> None:
+    """A stop during the hold's own correction, the hold staying on: the hold goes on toward
+    the same goal (it used to hold wherever the stop left the correction)."""
+    h = Harness(MODEL)
+    h.send("AX;HV100;HG10;HD0;HN;")
+    h.run()
+    h.board.inject_slip("X", -300, h.t)
+    h.advance(0.5)
+    assert number(h.query("RE;")) < 0  # the correction is under way
+    h.send(command)
+    h.advance(20.0)
+    assert number(h.query("RE;")) == 0
+    assert ea(h)[1] == "E"  # the hold is still on
+    assert h.errors() == []

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 
+import pytest
+
 from omsd.board.harness import Harness
 from omsd.engine.events import DoneEvent
 
@@ -49,3 +51,15 @@ def test_pc48_id_stays_not_valid_in_a_contour_definition() -> None:
     h = Harness("PC48-4")
     h.send("AA CD0,0; ID")
     assert len(h.errors()) == 1
+
+
+@pytest.mark.parametrize("stop", ["KL;", "AA;ST;"])
+def test_an_id_in_a_contour_stopped_before_it_sets_no_done_flag(stop: str) -> None:
+    """A contour killed or stopped before the place of its ID never reaches it: no done flags,
+    no interrupt (the contour's I/O actions further on, AN/AF/BL/BH, are dropped too)."""
+    h = Harness("PCIX-004")
+    h.send("AA;VL1000;AC100000;CD0,0;MT1000,0;ID;MT2000,0;CE;CX;")
+    h.advance(0.5)
+    h.send(stop)
+    h.advance(5.0)
+    assert [e for e in h.events() if isinstance(e, DoneEvent)] == []

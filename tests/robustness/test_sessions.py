@@ -98,14 +98,16 @@ class Host:
         """Let time pass to ``t``, visiting the board's deadlines (:data:`VISITS` of them in
         all, then straight to ``t``); True if anything was due."""
         due = False
-        while self.visits < VISITS:
-            self.visits += 1
+        while True:
             d = self.link.next_deadline()
             if d is None or d > t:
                 break
+            due = True
+            if self.visits >= VISITS:
+                break
+            self.visits += 1
             self.t = max(self.t, d)
             self._take(self.link.to_host(self.t))
-            due = True
         self.t = max(self.t, t)
         self._take(self.link.to_host(self.t))
         return due

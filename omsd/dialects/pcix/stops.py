@@ -58,7 +58,9 @@ def _stop(ix: Interpreter, axes: list[Axis], cell: Cell, t: float, kill: bool) -
     executor = ix.machine.executor
     for axis in axes:
         executor.flush(axis, t)
-        axis.queue.append(Op("STOP", (kill,), ix.cost(cell, axis), source=ix.machine.input_source))
+        axis.queue.append(
+            Op("STOP", (kill, None), ix.cost(cell, axis), source=ix.machine.input_source)
+        )
 
 
 @handles("KS")
