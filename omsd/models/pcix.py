@@ -89,8 +89,8 @@ feedback, and still others for servo axes." The icons are lost in the text, so `
 the prose; it restricts the single-axis form only.
 
 * "servo": §5.6 "The following commands are valid only for servo axes" — BI, KO, ?KO, ?SO, ?SV,
-  SVI, SVN, UN (§5.6.1) and KA, KB, KD, KF, KI, KP, KU, KV with their queries and ?PM ("whether
-  the PID for the current servo axis is enabled") (§5.6.2); DZ ("zero voltage output …
+  SVI, SVN, UN (§5.6.1) and KA, KB, KD, KF, KI, KP, KU, KV with their queries (§5.6.2; ?PM,
+  listed there too, answers on every axis: below); DZ ("zero voltage output …
   by the servo motor"). HF and HN are listed in §5.6.2 but their pages address steppers with
   encoders too, so they are "feedback".
 * "stepper_encoder": HD, HG, HV ("designed to work with stepper motor applications using encoders
@@ -253,7 +253,11 @@ PCIX_COMMANDS: dict[str, CommandSpec] = {
         _query("?LM"),
         _query("?LS"),
         _query("?PA"),
-        _query("?PM", motor=_SERVO),  # "whether the PID for the current servo axis is enabled"
+        # "REPORT HOLD STATE": the hold state of any axis (a servo's loop, a stepper's position
+        # maintenance, hf on an open-loop axis), not the servo-only list's error: omsMAXnet asks
+        # every axis "A? ?PM" on firmware before 1.30 (the PCIx's WY says 1.26), each unanswered
+        # query a 2 s timeout (docs/decisions.md)
+        _query("?PM"),
         _query("?RT"),
         _query("?SE"),
         _query("?SK", motor=_STEP_ENC),

@@ -26,6 +26,7 @@ import re
 import pytest
 
 from omsd.board.board import Board
+from omsd.board.harness import Harness
 from omsd.link import make_link
 from omsd.models import get_model
 
@@ -261,3 +262,19 @@ def test_max_lower_case_poll() -> None:
     c = max_start("PCIX-400")
     assert c.send(b"am;ri;\n") == b"PNNN,PNNN,PNNN,PNNN\n\r"
     assert c.send(b"am pp;\n") == b"0,0,0,0\n\r"
+
+
+@pytest.mark.parametrize("model", ["PCIX-400", "PCIX-040", "PCIX-004", "PCIX-202"])
+def test_pm_is_answered_on_every_pcix_axis(model: str) -> None:
+    """omsMAXnet on firmware below 1.30 (the PCIx's WY says 1.26) asks ``A? ?PM`` of every axis
+    whenever none is moving (omsBaseController::getClosedLoopStatus); an unanswered query costs
+    it 2 s. "REPORT HOLD STATE": hn/hf on servos, on steppers with encoders (their HN), hf on
+    an open-loop axis."""
+    h = Harness(model)
+    answers = [h.send(f"A{a};?PM;") for a in "XYZT"]
+    assert answers == [b"hf\n\r"] * 4
+    assert h.errors() == []
+    if model == "PCIX-040":
+        h.send("AX;HV1000;HG10;HN;")
+        h.run()
+        assert h.send("AX;?PM;") == b"hn\n\r"

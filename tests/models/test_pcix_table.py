@@ -248,7 +248,8 @@ def test_axis_restricted_modes() -> None:
 
 
 SERVO = {"BI", "UN", "SVI", "SVN", "KO", "DZ", "KA", "KB", "KD", "KF", "KI", "KP", "KU", "KV"}
-SERVO |= {"?KA", "?KB", "?KD", "?KF", "?KI", "?KO", "?KP", "?KU", "?KV", "?SO", "?SV", "?PM"}
+SERVO |= {"?KA", "?KB", "?KD", "?KF", "?KI", "?KO", "?KP", "?KU", "?KV", "?SO", "?SV"}
+# (?PM, in §5.6.2's servo list, answers on every axis: docs/decisions.md, omsMAXnet)
 STEPPER_ENCODER = {"HD", "HG", "HV", "?HD", "?HG", "?HV", "ER", "?ER", "ES", "?ES", "IS", "ET"}
 STEPPER_ENCODER |= {"TN", "TF", "?SK"}
 FEEDBACK = {"HN", "HF", "HE", "RE", "EA", "IP"}

@@ -108,7 +108,7 @@ def _q_sv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("?PM")
 def _q_pm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """PID (hold) state of the current axis: ``hn`` / ``hf`` (a stepper with an encoder: its
-    position maintenance)."""
+    position maintenance; an open-loop stepper: ``hf``, it holds nothing)."""
     axis = ix.axis
     on = axis.servo.closed if axis.servo is not None else axis.hold
     reply(ix, "hn" if on else "hf", t)
