@@ -232,44 +232,36 @@ def test_pcix_contour_and_staircase_velocities_at_their_edge(
 
 # -- power-up defaults -------------------------------------------------------------------------
 
+#: (model, query, reply, the manual's words): a stepper's defaults on PCIX, the servo gains on
+#: SERVO
 PCIX_DEFAULTS = [
-    ("?AC", b"ac2000000", "L1674: “The default value is 2,000,000.”"),
-    ("?VL", b"vl200000", "L6922: “The factory default is 200,000 steps per second.”"),
-    ("?VB", b"vb0", "L6868: “where the factory default is zero steps per second”"),
-    ("?DC", b"dc200000", "L2817: “The deceleration rate defaults to 200,000”"),
-    ("?ES", b"es1", "L3153: “The factory default value is 1.”"),
-    ("?HG", b"hg1", "L3548: “The factory default value is 1.”"),
-    ("?HD", b"hd0", "L3455: “The factory default value is zero.”"),
-    ("?HV", b"hv0", "L3814: “The factory default setting is zero”"),
-    ("?SE", b"se0", "L6140: “The factory default settling time is zero.”"),
-    ("?ER", b"er1.0", "L3098: “The factory default ratio is 1:1.”"),
+    (PCIX, "?AC", b"ac2000000", "L1674: “The default value is 2,000,000.”"),
+    (PCIX, "?VL", b"vl200000", "L6922: “The factory default is 200,000 steps per second.”"),
+    (PCIX, "?VB", b"vb0", "L6868: “where the factory default is zero steps per second”"),
+    (PCIX, "?DC", b"dc200000", "L2817: “The deceleration rate defaults to 200,000”"),
+    (PCIX, "?ES", b"es1", "L3153: “The factory default value is 1.”"),
+    (PCIX, "?HG", b"hg1", "L3548: “The factory default value is 1.”"),
+    (PCIX, "?HD", b"hd0", "L3455: “The factory default value is zero.”"),
+    (PCIX, "?HV", b"hv0", "L3814: “The factory default setting is zero”"),
+    (PCIX, "?SE", b"se0", "L6140: “The factory default settling time is zero.”"),
+    (PCIX, "?ER", b"er1.0", "L3098: “The factory default ratio is 1:1.”"),
+    (SERVO, "?KP", b"kp10.00", "L4434: “Default value is 10.00.”"),
+    (SERVO, "?KI", b"ki0.04", "L4286: “Default value is 0.04.”"),
+    (SERVO, "?KD", b"kd20.00", "L4190: “The factory default value is 20.00.”"),
+    (SERVO, "?KV", b"kv0.00", "L4584: “The factory default value is zero.”"),
+    (SERVO, "?KA", b"ka0.00", "L4098: “The factory default value is zero.”"),
+    (SERVO, "?KF", b"kf0", "L4236: “The default value is 0.”"),
+    (SERVO, "?KO", b"ko0", "L4387: “The factory default value is zero.”"),
 ]
 
 
 @pytest.mark.parametrize(
-    ("query", "reply", "words"), PCIX_DEFAULTS, ids=[q for q, _, _ in PCIX_DEFAULTS]
+    ("model", "query", "reply", "words"),
+    PCIX_DEFAULTS,
+    ids=[f"{m}{q}" for m, q, _, _ in PCIX_DEFAULTS],
 )
-def test_pcix_factory_value_reported(query: str, reply: bytes, words: str) -> None:
-    h = Harness(PCIX)
-    assert h.send(f"AX {query} ") == reply + b"\n\r", words
-
-
-SERVO_DEFAULTS = [
-    ("?KP", b"kp10.00", "L4434: “Default value is 10.00.”"),
-    ("?KI", b"ki0.04", "L4286: “Default value is 0.04.”"),
-    ("?KD", b"kd20.00", "L4190: “The factory default value is 20.00.”"),
-    ("?KV", b"kv0.00", "L4584: “The factory default value is zero.”"),
-    ("?KA", b"ka0.00", "L4098: “The factory default value is zero.”"),
-    ("?KF", b"kf0", "L4236: “The default value is 0.”"),
-    ("?KO", b"ko0", "L4387: “The factory default value is zero.”"),
-]
-
-
-@pytest.mark.parametrize(
-    ("query", "reply", "words"), SERVO_DEFAULTS, ids=[q for q, _, _ in SERVO_DEFAULTS]
-)
-def test_pcix_servo_factory_value_reported(query: str, reply: bytes, words: str) -> None:
-    h = Harness(SERVO)
+def test_pcix_factory_value_reported(model: str, query: str, reply: bytes, words: str) -> None:
+    h = Harness(model)
     assert h.send(f"AX {query} ") == reply + b"\n\r", words
 
 
