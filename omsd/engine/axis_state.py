@@ -320,9 +320,14 @@ class AxisState:
         self.track_counter = self.position(t)
         self.invalidate()
 
+    def tracked_encoder(self, x: float) -> float:
+        """The encoder count the no-slip relation (:meth:`anchor_tracking`) gives for counter
+        position ``x``: what slip detection expects, and what a hold holds at the end of a
+        motion."""
+        return self.track_enc + self.ratio * (x - self.track_counter)
+
     def slip_error(self, t: float) -> float:
-        expected = self.track_enc + self.ratio * (self.position(t) - self.track_counter)
-        return self.encoder(t) - expected
+        return self.encoder(t) - self.tracked_encoder(self.position(t))
 
     def to_motor(self, value: float) -> float:
         """User counts (encoder counts on an encoder axis) to motor steps (PC48 §6.15)."""

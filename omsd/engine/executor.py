@@ -383,9 +383,7 @@ class Executor:
         axis.in_position = True
         if axis.hold:
             if stopped is not Motion.IDLE and stopped is not Motion.HOLD:
-                axis.hold_goal = axis.track_enc + axis.ratio * (
-                    axis.position(t) - axis.track_counter
-                )
+                axis.hold_goal = axis.tracked_encoder(axis.position(t))
             self.check_hold(axis, t)
 
     def cancel(self, axis: Axis, command: str) -> None:

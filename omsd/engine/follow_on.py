@@ -109,7 +109,7 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
     if not starts:
         return False
     for axis, x, start in starts:
-        axis.hold_goal = axis.track_enc + axis.ratio * (x - axis.track_counter)  # (on_end)
+        axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
         # (after_events: the straightforward way starts the move in the settle that follows
         # the instant's reactions, which Machine.advance runs with after_events set)
         _start(machine, axis, tick, start, True)

@@ -177,7 +177,7 @@ def _hn(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if not axis.hold:
         axis.hold = True
         x = axis.traj.final if axis.traj.is_finite else axis.position(t)
-        axis.hold_goal = axis.track_enc + axis.ratio * (x - axis.track_counter)
+        axis.hold_goal = axis.tracked_encoder(x)
         if not axis.slip_detect:
             axis.anchor_tracking(t)
     ex.check_hold(axis, t)

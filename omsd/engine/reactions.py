@@ -33,7 +33,7 @@ def on_end(ex: Executor, axis: Axis, t: float) -> None:
                 axis.aux_timer = t + axis.se_ms / 1000.0
             else:
                 axis.aux = not axis.pa
-        axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
+        axis.hold_goal = axis.tracked_encoder(axis.position(t))
         axis.in_position = True
         ex.check_hold(axis, t)
     axis.invalidate()
@@ -102,7 +102,7 @@ def _look_for_home(axis: Axis, t: float) -> None:
     if home.kill:
         axis.halt(t)  # "The position counter is not cleared or reset."
         if axis.hold:  # (hold kept through it) what is held is where the pulses stopped
-            axis.hold_goal = axis.track_enc + axis.ratio * (axis.position(t) - axis.track_counter)
+            axis.hold_goal = axis.tracked_encoder(axis.position(t))
         return
     axis.load_counter(t, home.position)
     if axis.has_encoder and axis.servo is None and axis.host.options.home_loads_encoder:
