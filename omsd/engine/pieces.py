@@ -63,8 +63,12 @@ class Poly:
         disc = b * b - 4 * a * c
         if disc < 0.0:
             return []
-        s = math.sqrt(disc)
-        roots = ((-b - s) / (2 * a), (-b + s) / (2 * a))
+        # the roots without cancellation: (-b -+ s) / 2a loses the small root when the jerk is
+        # tiny beside the acceleration (j = 6e-293, a0 = -21, v0 = 7 gave 0.0, not 1/3)
+        q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+        if q == 0.0:  # b = 0 and c = 0: the velocity touches zero at the start, no sign change
+            return []
+        roots = (q / a, c / q)
         return sorted(r for r in roots if 0.0 < r < self.duration)
 
 
