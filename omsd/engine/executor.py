@@ -365,6 +365,14 @@ class Executor:
         axis.begin(tick, pieces, Motion.HOLD, final=float(round(x + motor_error - remaining)))
         axis.in_position = False
 
+    def end_correction(self, axis: Axis, t: float) -> None:
+        """A hold's correction stops where it is once the hold is off (HF; the PC48's LP): the
+        correction's velocity is HG × the error, which only position maintenance computes ("This
+        gain parameter is multiplied by the position error in determining the velocity during
+        correction"). It began with no ramp and ends the same way."""
+        if axis.motion is Motion.HOLD and not axis.hold:
+            axis.halt(t)
+
     def hold_off(self, axis: Axis) -> None:
         """Position hold and slip detection off, as HF and a limit turn them off on every board
         (and as the PC48's "LP, HM, HR, SA, ST or KL" do)."""

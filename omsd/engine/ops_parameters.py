@@ -52,6 +52,7 @@ def _lp(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
         axis.load_counter(t, float(math.trunc(axis.to_motor(value))))
         axis.anchor_encoder(t, float(math.trunc(value)))
         ex.cancel(axis, "LP")
+        ex.end_correction(axis, t)
     else:
         axis.load_counter(t, float(math.trunc(value)))
     axis.hold_goal = float(axis.encoder(t))
@@ -156,6 +157,7 @@ def _hf(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
             axis.decelerate(t)
         return None
     ex.hold_off(axis)
+    ex.end_correction(axis, t)
     axis.tracking = False
     return None
 
