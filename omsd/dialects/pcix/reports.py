@@ -13,7 +13,7 @@ from omsd.dialects.pcix.common import (
     reply,
 )
 from omsd.dialects.shared.io import aux
-from omsd.engine.axis import Axis
+from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
 from omsd.protocol.errors import ErrorKind
@@ -37,9 +37,17 @@ def _rq(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("RC")
 def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "2000000, 2000000, 2000000, 2000000": the acceleration now, "zero when the stage is
-    stopped or running at constant speed" (unlike the PC48, which reports the ramp's)."""
+    stopped or running at constant speed" (unlike the PC48, which reports the ramp's). "While a
+    contour is executing, the value computed to generate the appropriate lead in will be
+    returned", for the whole contour as on the PC48."""
     axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
-    reply(ix, ", ".join(str(math.trunc(abs(a.acceleration(t)))) for a in axes), t)
+    reply(ix, ", ".join(str(math.trunc(_acceleration(ix, a, t))) for a in axes), t)
+
+
+def _acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
+    if axis.motion is Motion.CONTOUR:
+        return ix.contour_lead.get(axis.index, 0.0)
+    return abs(axis.acceleration(t))
 
 
 @handles("RU")
