@@ -3,6 +3,10 @@
 * PCIx RC inside a contour: "While a contour is executing, the value computed to generate the
   appropriate lead in will be returned" (PCIx §5, RC REPORT ACCELERATION), as the PC48 already
   does; it used to report the acceleration of the moment (0 on the constant-velocity path).
+* CX (and the PCIx's CG) in AM mode meets and takes queue units on the contour's axes only, as an
+  AM GO does on its move's: AM "allows several tasks to be managed simultaneously ... a task may
+  be performing coordination motion on 2 axes, while a second task is performing unrelated but
+  simultaneous motion on another axis". It used to wait for every axis, as in AA.
 """
 
 from __future__ import annotations
@@ -34,3 +38,48 @@ def test_pcix_rc_reports_the_lead_in_for_the_whole_contour(start: str) -> None:
     h.run()
     assert number(h.send("AX;RC;")) == 0
     assert h.errors() == []
+
+
+def queues(h: Harness, rq: str) -> list[int]:
+    return [int(n) for n in h.send(rq).strip(b"\n\r").split(b",")]
+
+
+@pytest.mark.parametrize(
+    ("model", "sep", "start", "units"),
+    [("PC48-4", " ", "CX", 6), ("VS4-040", " ", "CX", 6), ("PCIX-004", ";", "CG", 17)],
+)
+def test_am_contour_runs_beside_another_task(model: str, sep: str, start: str, units: int) -> None:
+    """AM (PC48 §6.3, PCIx AM page): "The AM mode allows several tasks to be managed
+    simultaneously. For instance, a task may be performing coordination motion on 2 axes, while
+    a second task is performing unrelated but simultaneous motion on another axis." Z is sent on
+    a 5 s move first; the contour on X and Y, executed in AM, starts at once (CX "AA,AM 6" in X's
+    and Y's queues; the PCIx's CG "9*" + "Linear ( PF, LA ) 8"), leaving Z's queue alone. Before,
+    the contour waited for Z's move to end (X still at 0 after 3 s)."""
+    h = Harness(model)
+    cmds = ["AA", "VL1000,1000,1000,1000;", "AC10000,10000,10000,10000;", "AM", "MR0,0,5000;"]
+    cmds += ["GO", "AA", "CV1000", "CD1000,0;", "MT2000,0;", "CE", "AM", ""]
+    h.send(sep.join(cmds))
+    rq = "RQ" + sep
+    before = queues(h, rq)
+    h.send(start + sep)
+    after = queues(h, rq)
+    assert [b - a for b, a in zip(before, after, strict=True)] == [units, units, 0, 0]
+    h.until(1.0)  # half way through the 2 s lead-in (1000 steps to reach 1000 steps/s)
+    assert h.position("X") == 250 and 900 < h.position("Z") < 1000
+    h.until(3.0)
+    assert h.position("X") == 2000 and h.position("Z") < 5000
+    h.run()
+    assert (h.position("X"), h.position("Y"), h.position("Z")) == (2050, 0, 5000)
+    assert h.errors() == []
+
+
+def test_aa_contour_still_waits_for_every_axis() -> None:
+    """In AA, CX stays a meeting point of every axis, as an AA GO ("Each axis programmed to move
+    will start together upon executing the GO command"; docs/decisions.md, Synchronisation)."""
+    h = Harness("PC48-4")
+    h.send("AA VL1000,1000,1000,1000; AC10000,10000,10000,10000; MR0,0,5000; GO ")
+    h.send("CV1000 CD1000,0; MT2000,0; CE CX ")
+    h.until(3.0)
+    assert h.position("X") == 0
+    h.run()
+    assert h.position("X") == 2050

@@ -32,7 +32,7 @@ from omsd.dialects.pcix.common import (
     handles,
 )
 from omsd.dialects.shared import HANDLERS
-from omsd.dialects.shared.contour import run_contour, runnable_contour
+from omsd.dialects.shared.contour import contour_task, run_contour, runnable_contour
 from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor, Result
@@ -100,13 +100,12 @@ def _fl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("CG")
 def _cg(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """CG (§5.9.8): "a form of the CX command"; a marker after it in every queue holds MT."""
-    machine = ix.machine
     defn = runnable_contour(ix)
-    group = SyncGroup(set(range(len(machine.axes))))
-
+    members = contour_task(ix, defn)
+    group = SyncGroup({a.index for a in members})
     group.action = lambda g, when: run_contour(ix, defn, when, "CG")
     items: list[tuple[Axis, Op]] = []
-    for axis in machine.axes:
+    for axis in members:
         items.append((axis, Op("CX", (), ix.cost(cell, axis), group)))
         items.append((axis, Op("CGEND", (), 0)))
     ix.enqueue(items)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.shared.table import handles
-from omsd.engine.axis import Motion
+from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
 from omsd.protocol.errors import ErrorKind
@@ -113,13 +113,24 @@ def runnable_contour(ix: Interpreter) -> ContourDefinition:
     return defn
 
 
+def contour_task(ix: Interpreter, defn: ContourDefinition) -> list[Axis]:
+    """The axes whose queues CX (and the PCIx's CG) goes to and meets in: every axis in AA, as
+    an AA GO; in AM the contour's own, as an AM GO meets only the axes of its move ("a task may
+    be performing coordination motion on 2 axes, while a second task is performing unrelated
+    but simultaneous motion on another axis")."""
+    axes = ix.machine.axes
+    if ix.mode == "AM":
+        return [axes[i] for i in defn.axes]
+    return list(axes)
+
+
 @handles("CX")
 def _cx(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    machine = ix.machine
     defn = runnable_contour(ix)
-    group = SyncGroup(set(range(len(machine.axes))))
+    members = contour_task(ix, defn)
+    group = SyncGroup({a.index for a in members})
     group.action = lambda g, when: run_contour(ix, defn, when, "CX")
-    ix.enqueue([(a, Op("CX", (), ix.cost(cell, a), group)) for a in machine.axes])
+    ix.enqueue([(a, Op("CX", (), ix.cost(cell, a), group)) for a in members])
 
 
 def run_contour(ix: Interpreter, defn: ContourDefinition, t: float, command: str) -> None:
