@@ -99,7 +99,8 @@ def _fl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("CG")
 def _cg(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """CG (§5.9.8): "a form of the CX command"; a marker after it in every queue holds MT."""
+    """CG (§5.9.8): "a form of the CX command"; a marker after it in each of its queues (every
+    axis's in AA, the contour's in AM: ``contour_task``) holds MT."""
     defn = runnable_contour(ix)
     members = contour_task(ix, defn)
     group = SyncGroup({a.index for a in members})
