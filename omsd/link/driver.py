@@ -14,8 +14,9 @@ What a host program sees through the driver differs from the board's own stream:
   message string." The done byte is the raw register value, not ASCII.
 * Wait characters and comments (§7.3.4): on ``!`` the driver "stops sending characters to the
   board until the board produces a DONE interrupt ... When the DONE interrupt occurs after the
-  driver processes the ! symbol, the DONE condition is cleared with a Control-Y"; ``@`` likewise
-  waits for a limit interrupt; "All characters following the * up to the next control character
+  driver processes the ! symbol, the DONE condition is cleared with a Control-Y" (when the
+  board has room for it, before the characters the wait held); ``@`` likewise waits for a limit
+  interrupt; "All characters following the * up to the next control character
   (<LF>, <CR>, <TAB>, et cetera) are ignored by the device driver and are not passed to the
   controller."
 * Echo (EN): the board's echo of what it reads is a string from the board like any other: the
@@ -277,7 +278,7 @@ class DriverLink:
             seen = self._unclaimed.pop((b, session), None)
             if seen is not None and seen >= now:
                 if b == WAIT_DONE:
-                    self.board.receive(CONTROL_Y, now, session)
+                    self._clear_done(now, session)
                 return True
             self._waiting = b
             self._wait_session = session
@@ -290,6 +291,19 @@ class DriverLink:
         sent = self.board.receive(bytes(pending[:j]), now, session)
         self._consume(sent)
         return sent > 0
+
+    def _clear_done(self, now: float, session: int) -> None:
+        """ "the DONE condition is cleared with a Control-Y. Characters are then allowed to be
+        passed to the board" (§7.3.4): a board with no room for it now (its input buffer full)
+        gets it first when it has, ahead of every character held here."""
+        if self.board.receive(CONTROL_Y, now, session):
+            return
+        self._pending[:0] = CONTROL_Y
+        runs = self._runs
+        if runs and runs[0][0] == session:
+            runs[0][1] += 1
+        else:
+            runs.appendleft([session, 1])
 
     def _release(self, now: float) -> None:
         what = _WAIT_NAMES[self._waiting] if self._waiting is not None else "?"
@@ -381,7 +395,7 @@ class DriverLink:
                 if mine and self._waiting == WAIT_DONE and item.time >= self._wait_since:
                     session = self._wait_session
                     self._release(now)
-                    board.receive(CONTROL_Y, now, session)
+                    self._clear_done(now, session)
                 else:
                     self._unclaimed[(WAIT_DONE, source)] = item.time
         return len(self._events) > events_before
