@@ -117,6 +117,7 @@ class DriverLink:
     def through_buffer(self, data: bytes, now: float, session: int = 0) -> int:
         """:meth:`from_host` the driver's way, by its buffer, whatever the bytes (what it does
         but for its fast path)."""
+        self._serve_due(now)
         skipped = 0
         if (self._pending or self._waiting is not None) and CONTROL_D in data:
             skipped = data.index(CONTROL_D)
@@ -136,6 +137,7 @@ class DriverLink:
         no ``*``, ``!`` or ``@`` in the bytes, the driver has nothing to do but pass them on, so
         they go to the board as they are, without a stay in the buffer; what the board does not
         take waits there as it would have. The same steps as :meth:`_pass_on` takes for them."""
+        self._serve_due(now)
         taken = data[: self.buffer_size]
         sent = self.board.receive(taken, now, session) if taken else 0
         if sent < len(taken):
@@ -144,6 +146,18 @@ class DriverLink:
         if sent and (self._pending or touched):
             self._pass_on(now)  # (with nothing left and the board not asked again, a no-op)
         return len(taken)
+
+    def _serve_due(self, now: float) -> None:
+        """What the board did by itself before ``now`` (a DONE, a limit), served before the
+        host's bytes of ``now`` go on: the driver processes an interrupt when it occurs (§7.3.3),
+        so its marker, the done flag register's byte and a wait it ends come before anything
+        written after it reaches the board (an RA or a Control-Y would clear the register).
+        What :meth:`to_host` would have done had the link been run then."""
+        board = self.board
+        deadline = board.next_deadline()
+        if deadline is not None and deadline <= now:
+            board.advance(now)
+            self._pass_on(now)
 
     @property
     def waiting(self) -> str | None:
