@@ -1,5 +1,5 @@
 """PCIx status and reports, flags and the general-purpose I/O whose meaning changed from the
-PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, BX, RB, BS)."""
+PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, SE, BX, RB, BS)."""
 
 from __future__ import annotations
 
@@ -169,6 +169,17 @@ def _ph(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.enqueue([(a, Op(code, (), ix.cost(cell, a))) for a in axes])
     for a in axes:
         ix.pa_entered[a.index] = False
+
+
+@handles("SE")
+def _se(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """The settling time, in force at once: "SE#; AX – AT Immediate", "SE#,#,##; AA-AM
+    Immediate" (the PC48's SE is queued)."""
+    items = {ix.axis_index: ix.one(cmd)} if ix.mode == "single" else dict(ix.per_axis(cmd))
+    times = {index: ix.integer(value, "SE") for index, value in items.items()}
+    for index, ms in times.items():
+        ix.machine.axes[index].se_ms = ms
+        ix.se_entered[index] = ms > 0
 
 
 # -- general-purpose I/O --------------------------------------------------------------------------

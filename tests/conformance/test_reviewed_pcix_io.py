@@ -1,0 +1,42 @@
+"""PCIx I/O and report commands where a review against its manual (002_5f0bea9264c6d239.txt)
+found omsd wrong.
+
+* SE is immediate in both modes ("SE#; AX – AT Immediate", "SE#,#,##; AA-AM Immediate"): a
+  settling time typed while the axis is busy is in force at once, not when its queue reaches it.
+"""
+
+from __future__ import annotations
+
+from omsd.board.harness import Harness
+
+from .pcix import reply
+
+
+def test_se_typed_on_a_busy_axis_is_in_force_at_once() -> None:
+    """SE's table: "SE#; AX – AT Immediate", "SE#,#,##; AA-AM Immediate"; §5.4.4: "immediate
+    commands are executed the moment they are received". ?SE "reports the settling time setting
+    ( SE ) used with power automatic mode ( PA ) for the current axis"."""
+    h = Harness("PCIX-004")
+    h.send("AX;VL1000;MR100000;GO;")  # X busy for 100 s
+    h.send("SE250;")
+    assert h.send("?SE;") == reply("se250")  # (it was se0 until the move's end)
+    h.send("AY;VL1000;MR100000;GO;AA;SE,300;AY;")
+    assert h.send("?SE;") == reply("se300")  # (it was se0)
+    assert h.errors() == []
+
+
+def test_se_typed_during_a_move_settles_that_move() -> None:
+    """SE: "a settling time ... to be used before the auxiliary output is complemented when
+    using PA mode". In force at once, it applies to the end of the move that is running: PA0
+    raises the aux during a 1000-count move at VL1000 (1 s and the ramps) and it stays up 500
+    ms after the move."""
+    h = Harness("PCIX-004")
+    h.send("AX;PA;VL1000;MR1000;GO;")
+    h.advance(0.5)
+    h.send("SE500;")
+    h.advance(0.55)  # the move is over (1.0005 s)
+    assert h.position("X") == 1000
+    assert h.send("?AB;") == reply("an")  # (it was af: SE waited for the move to end)
+    h.advance(0.5)
+    assert h.send("?AB;") == reply("af")
+    assert h.errors() == []
