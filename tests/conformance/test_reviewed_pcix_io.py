@@ -3,6 +3,9 @@ found omsd wrong.
 
 * SE is immediate in both modes ("SE#; AX – AT Immediate", "SE#,#,##; AA-AM Immediate"): a
   settling time typed while the axis is busy is in force at once, not when its queue reaches it.
+* PA "selects the mode immediately but places entries in the axis command queue to set the state
+  of the aux bit to the idle state": ?PA reports the mode at once; the aux line goes to its idle
+  state when the axis reaches the entry.
 """
 
 from __future__ import annotations
@@ -39,4 +42,26 @@ def test_se_typed_during_a_move_settles_that_move() -> None:
     assert h.send("?AB;") == reply("an")  # (it was af: SE waited for the move to end)
     h.advance(0.5)
     assert h.send("?AB;") == reply("af")
+    assert h.errors() == []
+
+
+def test_pa_selects_the_mode_at_once_and_queues_the_idle_state() -> None:
+    """PA: "NOTE: PA selects the mode immediately but places entries in the axis command queue
+    to set the state of the aux bit to the idle state." ?PA "reports whether the current axis
+    has power automatic mode enabled". X is busy: ?PA answers the mode typed at once; the aux
+    line keeps its state (AN, the power-up default) until X reaches the entry, then idles low
+    (PA1: "the auxiliary output is turned off (driven low) upon the execution of the GO or GD
+    command and on at the end of the move", so its idle state is high; PA0's is low)."""
+    h = Harness("PCIX-004")
+    h.send("AX;VL1000;MR1000;GO;MR1000;GO;")  # X busy for about 2 s
+    h.send("PA1;")
+    assert h.send("?PA;") == reply("pa1")  # (it was paf until both moves had ended)
+    h.send("PA;")
+    assert h.send("?PA;") == reply("pa0")
+    assert h.send("?AB;") == reply("an")  # the entries wait in X's queue
+    h.advance(3.0)
+    assert h.position("X") == 2000
+    assert h.send("?PA;?AB;") == reply("pa0") + reply("af")  # PA0's idle state: low
+    h.send("AA;VL,1000;MR,1000;GO;PA,1;AY;")
+    assert h.send("?PA;") == reply("pa1")  # (it was paf)
     assert h.errors() == []

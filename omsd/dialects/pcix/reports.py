@@ -1,5 +1,5 @@
 """PCIx status and reports, flags and the general-purpose I/O whose meaning changed from the
-PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, SE, BX, RB, BS)."""
+PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, PA, SE, BX, RB, BS)."""
 
 from __future__ import annotations
 
@@ -169,6 +169,27 @@ def _ph(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ix.enqueue([(a, Op(code, (), ix.cost(cell, a))) for a in axes])
     for a in axes:
         ix.pa_entered[a.index] = False
+
+
+@handles("PA")
+def _pa(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "PA selects the mode immediately but places entries in the axis command queue to set the
+    state of the aux bit to the idle state": the mode (what ?PA reports, what the next GO or GD
+    does with the aux) is set at once; the entry, when the axis reaches it, sets it again and
+    puts the aux line in its idle state."""
+    if ix.mode == "single":
+        items: dict[int, Decimal | None] = {ix.axis_index: ix.one(cmd, required=False)}
+    else:
+        items = dict(ix.per_axis(cmd))
+    axes = ix.machine.axes
+    ix.enqueue(
+        [(axes[i], Op("PA", (value,), ix.cost(cell, axes[i]))) for i, value in items.items()]
+    )
+    for index, value in items.items():
+        # "upon the execution of the GO or GD ... if the parameter is zero or not specified"
+        axes[index].pa = value is None or value == 0
+        axes[index].invalidate()
+        ix.pa_entered[index] = True
 
 
 @handles("SE")
