@@ -6,6 +6,8 @@ found omsd wrong.
 * PA "selects the mode immediately but places entries in the axis command queue to set the state
   of the aux bit to the idle state": ?PA reports the mode at once; the aux line goes to its idle
   state when the axis reaches the entry.
+* PH and PL take a ``b`` in single-axis mode too ("PHb; AX – AT 1", "PLb; AX – AT 1"), as PA
+  does ("PAb; AX – AT 1*"): ``PH1;`` sets the current axis's aux, it is not a command error.
 """
 
 from __future__ import annotations
@@ -65,3 +67,20 @@ def test_pa_selects_the_mode_at_once_and_queues_the_idle_state() -> None:
     h.send("AA;VL,1000;MR,1000;GO;PA,1;AY;")
     assert h.send("?PA;") == reply("pa1")  # (it was paf)
     assert h.errors() == []
+
+
+def test_ph_and_pl_take_a_b_parameter_in_single_axis_mode() -> None:
+    """PH and PL's tables: "PHb; AX – AT 1", "PLb; AX – AT 1" (and "PHb,b,b,b; AA-AM 1"); §5.3:
+    "Each ‘b’ position, if used, can be any numeric value". PL "will turn the currently active
+    axis auxiliary port bit 'off' (low)", PH "'on' (high)"."""
+    h = Harness("PCIX-004")
+    h.send("AT;PL1;")
+    assert h.send("?AB;") == reply("af")  # (it was an: PL1 was a command error)
+    h.send("PH0;")
+    assert h.send("?AB;") == reply("an")
+    h.send("PA;PL;")
+    assert h.send("?PA;?AB;") == reply("paf") + reply("af")
+    assert h.send("AZ;?AB;") == reply("an")  # only the current axis
+    assert h.errors() == []
+    h.send("PH1,1;")  # a list is the multi-axis form
+    assert [e.kind.name for e in h.errors()] == ["TOO_MANY_PARAMETERS"]

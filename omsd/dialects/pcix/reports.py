@@ -163,9 +163,14 @@ def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("PH", "PL")
 def _ph(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """Auxiliary output high (PH) or low (PL); "disables PA" (queued like AN/AF)."""
+    """Auxiliary output high (PH) or low (PL); "disables PA" (queued like AN/AF). The current
+    axis takes a ``b`` too: "PHb; AX – AT 1", "PLb; AX – AT 1"."""
     code = "AN" if cmd.mnemonic == "PH" else "AF"
-    axes = flag_axes(ix, cmd)
+    if ix.mode == "single":
+        ix.one(cmd, required=False)  # any numeric value
+        axes = [ix.axis]
+    else:
+        axes = flag_axes(ix, cmd)
     ix.enqueue([(a, Op(code, (), ix.cost(cell, a))) for a in axes])
     for a in axes:
         ix.pa_entered[a.index] = False
