@@ -134,7 +134,7 @@ class Interpreter(Operands, LoopStacks):
         self.mt_blocked = False
         self.pa_entered: list[bool] = [False] * n
         self.se_entered: list[bool] = [False] * n
-        self.ws_bits: dict[int, list[int]] = {}
+        self.ws_bits: dict[int, list[tuple[int, bool]]] = {}  # (bit, loop while high)
         self.capture: Capture | None = None  # characters go to a recording, not the lexer
         self.only: frozenset[str] | None = None  # the only commands valid (a definition)
         self.depth = 0

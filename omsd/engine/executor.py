@@ -219,7 +219,8 @@ class Executor:
         """One decision for all axes of an AA input or while loop, so they stay together."""
         machine = self.machine
         if group.data["kind"] == "WD":
-            group.data["again"] = not machine.input_high(group.data["bit"], t)
+            high = machine.input_high(group.data["bit"], t)
+            group.data["again"] = high == group.data["while_high"]
         else:
             flags = [machine.front.take_while_flag(i) for i in group.members]
             group.data["again"] = not any(flags)

@@ -66,10 +66,12 @@ def _loop_count_end(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 
 def _loop_input_end(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # "execute the commands between the WS and WD commands as a loop while the specified
-    # general purpose input line is true, i.e. low ... The test is at the bottom"
+    # general purpose input line is true, i.e. low ... The test is at the bottom"; args: the
+    # bit and whether the loop goes on while it is high instead (the PCIx's WS#,state)
     if op.group is not None:
         return ex.arrive(axis, op, t)
-    return ex.loop_end(axis, not ex.machine.input_high(op.args[0], t), t)
+    bit, while_high = op.args
+    return ex.loop_end(axis, ex.machine.input_high(bit, t) == while_high, t)
 
 
 def _loop_while_end(ex: Executor, axis: Axis, op: Op, t: float) -> Result:

@@ -215,7 +215,7 @@ PC48_PROBES: dict[tuple[str, int], Probe] = {
     ("VS", 3): probe("AX VS1000,0,{v} ", rv("Y", False), reply("{i}")),
     ("LS", 1): probe("AX LS{v} ", lambda h: len(h.board.interpreter.loops[0]), is_(lambda v: 1)),
     ("WS", 1): probe(
-        "AX WS{v} ", lambda h: h.board.interpreter.ws_bits.get(0), is_(lambda v: [int(v)])
+        "AX WS{v} ", lambda h: h.board.interpreter.ws_bits.get(0), is_(lambda v: [(int(v), False)])
     ),
     ("HM", 1): probe("AX HM{v} "),
     ("HR", 1): probe("AX HR{v} "),
@@ -413,7 +413,7 @@ PCIX_PROBES: dict[tuple[str, int], Probe] = {
     ("VS", 2): probe("AX;VS1000,{v},0;", rv("X", True), reply("{i}")),
     ("VS", 3): probe("AX;VS1000,0,{v};", rv("Y", True), reply("{i}")),
     ("WS", 1): probe(
-        "AX;WS{v};", lambda h: h.board.interpreter.ws_bits.get(0), is_(lambda v: [int(v)])
+        "AX;WS{v};", lambda h: h.board.interpreter.ws_bits.get(0), is_(lambda v: [(int(v), False)])
     ),
     ("WT", 1): probe("AX;WT{v};"),
 }

@@ -8,6 +8,8 @@ found omsd wrong.
   state when the axis reaches the entry.
 * PH and PL take a ``b`` in single-axis mode too ("PHb; AX – AT 1", "PLb; AX – AT 1"), as PA
   does ("PAb; AX – AT 1*"): ``PH1;`` sets the current axis's aux, it is not a command error.
+* WS takes its optional second parameter, the state ("WD#[,state];" on the WS page): a
+  non-zero state loops while the input is high; it was a command error.
 """
 
 from __future__ import annotations
@@ -84,3 +86,40 @@ def test_ph_and_pl_take_a_b_parameter_in_single_axis_mode() -> None:
     assert h.errors() == []
     h.send("PH1,1;")  # a list is the multi-axis form
     assert [e.kind.name for e in h.errors()] == ["TOO_MANY_PARAMETERS"]
+
+
+def _ws_passes(text: str, loop_while_high: bool) -> tuple[int, int]:
+    """X's position after the loop ``text`` ran 3.5 s with input 1 in the state that keeps it
+    looping, then 2 s more after input 1 changed; each pass is an MR100 (35 ms)."""
+    h = Harness("PCIX-004")
+    h.board.set_input(1, loop_while_high, 0.0)
+    h.send(text)
+    h.advance(3.5)
+    h.board.set_input(1, not loop_while_high, h.t)
+    looped = h.position("X")
+    h.advance(2.0)
+    assert h.errors() == []
+    return looped, h.position("X")
+
+
+def test_ws_takes_a_state_to_loop_while_the_input_is_high() -> None:
+    """WS: "WD#[,state];" "If the optional second parameter, state, is entered then it
+    specifies the input condition to continue the loop. If the state parameter is zero, the
+    loop will continue while the input is low. If the state parameter is non-zero, the loop will
+    continue while the input is high. If the state parameter is not entered, the default
+    behavior is to loop while the input is low." "The test is at the bottom of the loop"."""
+    for text, high in (
+        ("AX;WS1,1;MR100;GO;WD;", True),  # (it was a command error: too many parameters)
+        ("AX;WS1,0;MR100;GO;WD;", False),
+        ("AX;WS1;MR100;GO;WD;", False),
+        ("AA;WS1,5;MR100;GO;WD;", True),  # AA: "entries are made in all axes' queues"
+    ):
+        looped, final = _ws_passes(text, high)
+        assert looped > 1000, text  # many passes while the input kept the loop going
+        assert final - looped <= 100, text  # the pass under way, then out of the loop
+    h = Harness("PCIX-004")  # already in the exit state: "executed only once"
+    h.send("AX;WS1,1;MR100;GO;WD;")
+    h.board.set_input(1, False, 0.0)
+    h.advance(1.0)
+    assert h.position("X") == 100
+    assert h.errors() == []

@@ -1,5 +1,5 @@
 """PCIx status and reports, flags and the general-purpose I/O whose meaning changed from the
-PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, PA, SE, BX, RB, BS)."""
+PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, PA, SE, WS, BX, RB, BS)."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ from omsd.dialects.pcix.common import (
     reply,
 )
 from omsd.dialects.shared.io import aux
+from omsd.dialects.shared.loops import while_sync
 from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
@@ -159,6 +160,18 @@ def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         return
     group = SyncGroup(set(range(len(machine.axes))))
     ix.enqueue([(a, Op("SW", args, ix.cost(cell, a), group)) for a in machine.axes])
+
+
+@handles("WS")
+def _ws(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    """ "WD#[,state];" (the WS page's syntax line): "If the state parameter is zero, the loop
+    will continue while the input is low. If the state parameter is non-zero, the loop will
+    continue while the input is high. If the state parameter is not entered, the default
+    behavior is to loop while the input is low." """
+    bit, state = ix.fields(cmd, 2)
+    if bit is None:
+        raise CommandFailed(ErrorKind.MISSING_PARAMETER)
+    while_sync(ix, cell, ix.integer(bit, "WS"), while_high=bool(state))
 
 
 @handles("PH", "PL")

@@ -38,13 +38,18 @@ def _ls(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("WS")
 def _ws(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    bit = ix.integer(ix.one(cmd), "WS")
+    while_sync(ix, cell, ix.integer(ix.one(cmd), "WS"), while_high=False)
+
+
+def while_sync(ix: Interpreter, cell: Cell, bit: int, while_high: bool) -> None:
+    """Open a WS loop on input ``bit``: its WD loops again while the input is low ("true"), or
+    while it is high (``while_high``, the PCIx's non-zero state)."""
     axes = _loop_axes(ix)
     ix.open_loop("WS", axes)
     ix.enqueue([(a, Op("WS", (bit,), ix.cost(cell, a))) for a in axes])
     ix.push_loop("WS", axes)
     for a in axes:
-        ix.ws_bits.setdefault(a.index, []).append(bit)
+        ix.ws_bits.setdefault(a.index, []).append((bit, while_high))
 
 
 @handles("WH")
@@ -66,7 +71,7 @@ def _loop_end(
         group.action = ix.machine.executor.loop_decision
         group.data["kind"] = cmd.mnemonic
         if args:
-            group.data["bit"] = args[0]
+            group.data["bit"], group.data["while_high"] = args
     ix.enqueue([(a, Op(cmd.mnemonic, args, ix.cost(cell, a), group)) for a in axes])
     ix.pop_loop(axes)
 
@@ -80,8 +85,8 @@ def _le(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _wd(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axes = _loop_axes(ix)
     bits = ix.ws_bits.get(axes[0].index, [])
-    bit = bits[-1] if bits else 0
-    _loop_end(ix, cmd, cell, "WS", (bit,))
+    bit, while_high = bits[-1] if bits else (0, False)
+    _loop_end(ix, cmd, cell, "WS", (bit, while_high))
     for a in axes:
         stack = ix.ws_bits.get(a.index)
         if stack:

@@ -280,7 +280,7 @@ ROWS: list[_R] = [
         "#RANGE : 0 ≤ Parameter1 ≤ 3",
         name="input bit",
         choice=NOTE + "the factory inputs are bits 0-3 (§2.2 S3), which the range line matches; the"
-        " optional second parameter (state) is not emulated",
+        " optional second parameter (state) has no range line: any number, zero or not",
     ),
     whole("WT", 1, 200_000, "RANGE: 1 ≤ WT ≤ 200,000", name="time", units="ms"),
     # -- the MAX-family extension (omsd/models/max_family.py) ---------------------------------
