@@ -176,6 +176,14 @@ class Lexer:
         self._step(b, out)
         return out
 
+    def give_back(self) -> bytes:
+        """The characters of a word begun and not complete (the letter that ended the last
+        command's operand), handed back; the lexer is between commands again. For text that
+        follows a command and is not commands (the PCIx's MD: the macro's command string)."""
+        begun = bytes(self._raw) if self._state is _MNEMONIC else b""
+        self.reset()
+        return begun
+
     # -- states -------------------------------------------------------------------------------
 
     def _step(self, b: int, out: list[Token]) -> None:

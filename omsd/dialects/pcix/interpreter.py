@@ -86,8 +86,14 @@ class PcixInterpreter(Interpreter):
     # -- macros ---------------------------------------------------------------------------------
 
     def record_macro(self, slot: int) -> None:
-        """MD: what follows, up to Control-Z, is macro ``slot``."""
-        self.capture = MacroCapture(slot, done=self._macro_recorded)
+        """MD: what follows, up to Control-Z, is macro ``slot``: "Enter the macro number
+        immediately after the MD command ... Next enter the command string". A letter that
+        ended the number (``MD1VL1000;``) is the command string's first."""
+        capture = MacroCapture(slot, done=self._macro_recorded)
+        if self.depth == 0:  # typed by the host (not an MD inside a macro being run)
+            for b in self.lexer.give_back():
+                capture.feed(b)
+        self.capture = capture
 
     def _macro_recorded(self, capture: MacroCapture, t: float) -> None:
         if not self.macros.define(capture.slot, capture.text):
