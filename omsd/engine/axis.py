@@ -38,6 +38,7 @@ class Axis(AxisState):
             return
         host = self.host
         self.source = host.talker
+        self.limit_ramp = False
         from_rest = self.motion is Motion.IDLE
         now = min(host.now, t)
         self.servo_sync(now)

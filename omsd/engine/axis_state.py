@@ -95,7 +95,8 @@ class AxisState:
         "dc", "direction", "direction_inverted", "done", "done_bit", "enc_base", "enc_phys", "es",
         "event", "gear", "has_encoder", "hd", "hg", "hold", "hold_goal", "home", "home_encoder",
         "home_high", "home_last_phys", "host", "hv", "in_arm", "in_fire", "in_position", "index",
-        "is_servo", "letter", "limit_high", "limit_latched", "limits_on", "motion", "outputs", "pa",
+        "is_servo", "letter", "limit_high", "limit_latched", "limit_ramp", "limits_on", "motion",
+        "outputs", "pa",
         "pending", "phys_offset", "queue", "quiet_memo", "ramp", "ratio", "se_ms", "sensor_check",
         "servo", "servo_last", "servo_trip_reported", "setpoint_offset", "slip_detect", "slip_kill",
         "slipped", "soft_limit", "source", "stall_phys", "track_counter", "track_enc", "tracking",
@@ -162,6 +163,9 @@ class AxisState:
         self.wait: Wait | None = None
         self.sensor_check: float | None = None
         self.limit_latched: int = 0  # direction of the limit last run into, for the status
+        # ramping down from a limit in the soft-limit mode (SL): the switch it runs past is what
+        # it is reacting to (reactions._limit); any new motion clears it (Axis.begin)
+        self.limit_ramp = False
         self.hold_goal = 0.0
         self.in_position = True
         self.outputs: list[tuple[float, tuple[str, int, bool]]] = []  # contour I/O actions
@@ -340,6 +344,11 @@ class AxisState:
         caller has it already (a snapshot asks for both limits and home at one instant)."""
         if self.travel_limits is not None and self.beyond_travel_limit(direction, t):
             return True  # soft travel limits flag a limit just as the switches would
+        return self.limit_switch_active(direction, t, carriage)
+
+    def limit_switch_active(self, direction: int, t: float, carriage: float | None = None) -> bool:
+        """The limit switch input in ``direction`` (the line after its active level), travel
+        limits aside."""
         forced = self.host.world.forced_limit(self.index, direction)
         if forced is not None:
             hit = forced

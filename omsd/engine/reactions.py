@@ -47,9 +47,9 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
         take_up_backlash(axis, t)
     for hook in ex.sensor_hooks:
         hook(ex, axis, t)
-    if axis.motion not in (Motion.IDLE, Motion.STOP) and axis.limits_on:
+    if axis.motion is not Motion.IDLE and axis.limits_on and not axis.limit_ramp:
         direction = axis.direction_at(t)
-        if direction and axis.limit_active(direction, t):
+        if direction and _limit_seen(axis, direction, t):
             _limit(ex, axis, direction, t)
     if axis.home is not None and axis.motion is Motion.HOME:
         _look_for_home(axis, t)
@@ -114,6 +114,19 @@ def _look_for_home(axis: Axis, t: float) -> None:
     axis.decelerate(t)
 
 
+def _limit_seen(axis: Axis, direction: int, t: float) -> bool:
+    """A limit stops the axis, whatever its motion: "The limit switch closure will stop the
+    associated pulse stream if the motor travels beyond its allowable limits and trips the
+    switch" (PC48 §4.3); "if the axis encounters a limit switch in the course of executing any
+    motion, the axis will be instructed to stop" (PCIx LN). A ramp down (ST, JG0, SP, the
+    deceleration after home) runs into the switches; the travel limits are for moves and jogs
+    (``sensing._travel_levels``). The soft-limit mode's own ramp down is not stopped again by
+    the switch it is reacting to (``limit_ramp``)."""
+    if axis.motion is Motion.STOP:
+        return axis.limit_switch_active(direction, t)
+    return axis.limit_active(direction, t)
+
+
 def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
     machine = ex.machine
     axis.limit_latched = direction
@@ -126,6 +139,7 @@ def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
     # not flushed except for the current move", for the motions the dialect names
     if axis.soft_limit and axis.motion in machine.options.soft_limit_motions:
         axis.decelerate(t)
+        axis.limit_ramp = True
     else:
         axis.halt(t)
         ex.flush(axis, t)

@@ -1,0 +1,99 @@
+"""Homing, limits and travel limits on the four boards, reviewed against the manuals
+(2026-11-28). Each test quotes what it checks; where a manual is silent the choice is in
+``docs/decisions.md`` ("Switches and the simulated world").
+
+* A limit switch stops an axis that is ramping down: the deceleration after ST, JG0 or a home
+  found runs into a limit and stops there, as every other motion does: "The limit switch
+  closure will stop the associated pulse stream if the motor travels beyond its allowable limits
+  and trips the switch" (PC48 §4.3; the VS4's the same); "if the axis encounters a limit switch
+  in the course of executing any motion, the axis will be instructed to stop and the host will
+  be notified of the event" (PCIx LN). Such a ramp ran on through the switch with no limit
+  event. The soft-limit mode's own ramp down (SL) still runs on beyond the switch.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from omsd.board.events import LimitEvent
+from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
+
+from .support import physical
+
+#: A stage whose positive limit is 3000 steps out and whose home switch is at 1000..1100.
+SHORT = AxisWorld(negative_limit=-20_000.0, positive_limit=3_000.0)
+
+BOARDS = [("PC48-4", " "), ("VS4-040", " "), ("PC46-6", " "), ("PCIX-400", ";")]
+
+
+def typed(h: Harness, text: str, sep: str) -> bytes:
+    return h.send(text.replace(" ", sep))
+
+
+def limits(h: Harness) -> list[tuple[str, int]]:
+    return [(e.axis, e.direction) for e in h.events() if isinstance(e, LimitEvent)]
+
+
+def position(h: Harness, sep: str) -> int:
+    reply = typed(h, "RP ", sep)
+    return int(reply.strip(b"\n\r"))
+
+
+@pytest.mark.parametrize(("model", "sep"), BOARDS)
+@pytest.mark.parametrize("stop", ["ST", "JG0"])
+def test_a_ramp_down_that_reaches_a_limit_stops_there(model: str, sep: str, stop: str) -> None:
+    """PC48 §4.3: "The limit switch closure will stop the associated pulse stream if the motor
+    travels beyond its allowable limits and trips the switch" (VS4 §4.3 the same; PC48 §2.2:
+    "the associated axis will stop moving if the limit line, for the direction the axis is
+    moving, is grounded"); PCIx LN: "With limit switches enabled, if the axis encounters a limit
+    switch in the course of executing any motion, the axis will be instructed to stop and the
+    host will be notified of the event." A jog at 20,000 steps/s stopped 1000 steps short of the
+    limit at AC100000 needs 2000 steps to ramp down: it stops at the switch, with the limit
+    event and ``L`` in its status. It ran on to 4000, beyond the switch, with no event."""
+    h = Harness(model, world={"X": SHORT})
+    typed(h, "AX AC100000 JG20000 ", sep)
+    h.until(0.2)  # at speed (0.2 s), 2000 steps out
+    assert position(h, sep) == 2000
+    typed(h, f"{stop} ", sep)
+    h.run()
+    assert limits(h) == [("X", 1)]
+    assert 3000 <= position(h, sep) <= 3000 + 20_000 // 2048 + 1  # on the sample it was seen
+    assert b"PNL" in typed(h, "QA ", sep)
+
+
+@pytest.mark.parametrize(("model", "sep"), BOARDS)
+def test_the_deceleration_after_home_stops_at_a_limit(model: str, sep: str) -> None:
+    """PC48 §6.11 HM: "The axis will not stop at home, but will initialize the position counter
+    when the home switch becomes true and decelerates to a stop"; the PCIx's HM: "This will
+    result in the axis stopping beyond the home switch so care should be taken to ensure
+    adequate stopping distance is available beyond the switches". Where there is not, the limit
+    switch stops it (§4.3, PCIx LN above). Home at 1000 at 20,000 steps/s and AC400000 needs 500
+    steps to stop; the limit is at 1200: the carriage stops there, the counter loaded with 0 at
+    home reads about 200, and the host hears of the limit (it ran on to about 1500, beyond the
+    switch, unheard)."""
+    world = AxisWorld(negative_limit=-20_000.0, positive_limit=1_200.0)
+    h = Harness(model, world={"X": world})
+    typed(h, "AX AC400000 VL20000 HM0 ", sep)
+    h.run()
+    assert limits(h) == [("X", 1)]
+    assert 1200 <= physical(h, "X") <= 1200 + 20_000 // 2048 + 1  # on the sample it was seen
+    assert 190 <= position(h, sep) <= 210  # (home, too, is seen on a sample)
+    assert b"PNL" in typed(h, "QA ", sep)
+
+
+@pytest.mark.parametrize(("model", "sep"), BOARDS)
+def test_the_soft_limit_ramp_still_runs_beyond_the_switch(model: str, sep: str) -> None:
+    """PC48 §6.5 SL: "The SL command changes the operation of the limit inputs causing the
+    output pulse train to ramp down instead of terminating immediately. The output queue is not
+    flushed except for the current move." (PCIx SL: "ramp an axis to a stop rather than
+    abruptly killing the motion when a limit switch is encountered".) That ramp is the limit's
+    own reaction and is not stopped again by the switch it runs past: a move at 20,000 steps/s
+    and AC400000 meets the switch at 3000 and stops about 500 steps beyond it; the ID after it
+    is still done."""
+    h = Harness(model, world={"X": SHORT})
+    typed(h, "AX SL AC400000 VL20000 MR10000 GO ID ", sep)
+    h.run()
+    assert limits(h) == [("X", 1)]
+    assert 3400 <= position(h, sep) <= 3600
+    assert h.axis("X").done
