@@ -72,6 +72,7 @@ class Axis(AxisState):
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
+        self.limit_ramp = False
         self.invalidate()
         moved(self, t, None, None)
 
@@ -82,6 +83,7 @@ class Axis(AxisState):
         x = self.traj.position(t)
         self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
         self.motion = Motion.IDLE
+        self.limit_ramp = False
         self.home = None
         self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
         self.invalidate()

@@ -164,7 +164,8 @@ class AxisState:
         self.sensor_check: float | None = None
         self.limit_latched: int = 0  # direction of the limit last run into, for the status
         # ramping down from a limit in the soft-limit mode (SL): the switch it runs past is what
-        # it is reacting to (reactions._limit); any new motion clears it (Axis.begin)
+        # it is reacting to (reactions._limit); cleared by new motion and at rest (Axis.begin,
+        # settle, halt: a move started without begin, omsd.engine.follow_on, starts from rest)
         self.limit_ramp = False
         self.hold_goal = 0.0
         self.in_position = True

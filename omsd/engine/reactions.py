@@ -139,7 +139,7 @@ def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
     # not flushed except for the current move", for the motions the dialect names
     if axis.soft_limit and axis.motion in machine.options.soft_limit_motions:
         axis.decelerate(t)
-        axis.limit_ramp = True
+        axis.limit_ramp = axis.moving  # (a ramp under way; none from rest)
     else:
         axis.halt(t)
         ex.flush(axis, t)

@@ -151,7 +151,7 @@ def _axis(a: Axis, now: float) -> tuple[Any, ...]:
         (traj.position(now), traj.velocity(now)),
         a.event,
         a.source,
-        (a.done, a.direction, a.slipped, a.hold, a.in_position, a.limit_latched),
+        (a.done, a.direction, a.slipped, a.hold, a.in_position, a.limit_latched, a.limit_ramp),
         (a.vl, a.ac, a.vb, a.aux, a.aux_timer, a.in_fire, a.sensor_check),
         (a.phys_offset, a.stall_phys, a.home is not None, a.pending is not None, a.hold_goal),
         a.contour_origin,

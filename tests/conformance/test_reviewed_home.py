@@ -97,3 +97,16 @@ def test_the_soft_limit_ramp_still_runs_beyond_the_switch(model: str, sep: str) 
     assert limits(h) == [("X", 1)]
     assert 3400 <= position(h, sep) <= 3600
     assert h.axis("X").done
+
+
+@pytest.mark.parametrize(("model", "sep"), BOARDS)
+def test_after_the_soft_limit_ramp_the_limit_stops_the_next_move(model: str, sep: str) -> None:
+    """SL: "The output queue is not flushed except for the current move": the move queued after
+    the one that met the limit runs when the ramp has ended, and the limit switch, still active,
+    stops it at once (§4.3: "will stop the associated pulse stream"); the host is told again.
+    Only the ramp SL makes is let run beyond the switch, not what follows it."""
+    h = Harness(model, world={"X": SHORT})
+    typed(h, "AX SL AC400000 VL20000 MR10000 GO MR1000 GO ", sep)
+    h.run()
+    assert limits(h) == [("X", 1), ("X", 1)]
+    assert 3400 <= position(h, sep) <= 3600  # where the ramp ended: the second move never ran
