@@ -123,3 +123,31 @@ def test_ws_takes_a_state_to_loop_while_the_input_is_high() -> None:
     h.advance(1.0)
     assert h.position("X") == 100
     assert h.errors() == []
+
+
+def _go_slots(h: Harness) -> int:
+    """The slots a ``GO;`` takes in X's queue (RQ reports every axis whatever the mode)."""
+    before = int(h.send("RQ;").split(b",")[0])
+    h.send("GO;")
+    return before - int(h.send("RQ;").split(b",")[0])
+
+
+def test_a_go_is_charged_pa_and_se_once() -> None:
+    """GO's table: "GO; AX – AT 5*", "* If PA (power automatic) mode is active add 2 to the
+    command queue", "* If an auxiliary output bit settle time has been specified add 3". A GO
+    typed after PA takes 5 + 2, after SE as well 5 + 2 + 3, whether PA and SE were typed while X
+    was busy (they are in force at once) or at rest (it took 5 + 2 + 2 and 5 + 2 + 3 + 2 + 3:
+    the PC48's per-GO charge of PA and SE on top of the PCIx table's add-ons)."""
+    for busy in (True, False):
+        h = Harness("PCIX-004")
+        h.send("AX;VL1000;")
+        if not busy:
+            h.send("PA;")
+            h.run()
+        h.send("MR100000;GO;MR100000;")  # X busy for 100 s
+        if busy:
+            h.send("PA;")
+        assert _go_slots(h) == 5 + 2, busy
+        h.send("SE100;")
+        assert _go_slots(h) == 5 + 2 + 3, busy
+        assert h.errors() == []

@@ -185,8 +185,6 @@ def _ph(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     else:
         axes = flag_axes(ix, cmd)
     ix.enqueue([(a, Op(code, (), ix.cost(cell, a))) for a in axes])
-    for a in axes:
-        ix.pa_entered[a.index] = False
 
 
 @handles("PA")
@@ -194,7 +192,9 @@ def _pa(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "PA selects the mode immediately but places entries in the axis command queue to set the
     state of the aux bit to the idle state": the mode (what ?PA reports, what the next GO or GD
     does with the aux) is set at once; the entry, when the axis reaches it, sets it again and
-    puts the aux line in its idle state."""
+    puts the aux line in its idle state. A GO or GD typed after it takes the "+2" of its table
+    from the mode in force (``Interpreter.cost``; the PC48's per-GO charge, ``pa_entered``, is
+    not the PCIx's: with both, the PA was charged twice)."""
     if ix.mode == "single":
         items: dict[int, Decimal | None] = {ix.axis_index: ix.one(cmd, required=False)}
     else:
@@ -207,18 +207,17 @@ def _pa(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         # "upon the execution of the GO or GD ... if the parameter is zero or not specified"
         axes[index].pa = value is None or value == 0
         axes[index].invalidate()
-        ix.pa_entered[index] = True
 
 
 @handles("SE")
 def _se(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """The settling time, in force at once: "SE#; AX – AT Immediate", "SE#,#,##; AA-AM
-    Immediate" (the PC48's SE is queued)."""
+    Immediate" (the PC48's SE is queued). A GO's "+3" follows it (``Interpreter.cost``), as PA's
+    "+2" does."""
     items = {ix.axis_index: ix.one(cmd)} if ix.mode == "single" else dict(ix.per_axis(cmd))
     times = {index: ix.integer(value, "SE") for index, value in items.items()}
     for index, ms in times.items():
         ix.machine.axes[index].se_ms = ms
-        ix.se_entered[index] = ms > 0
 
 
 # -- general-purpose I/O --------------------------------------------------------------------------

@@ -113,7 +113,9 @@ def _rm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 
 def _go_extra(ix: Interpreter, index: int) -> int:
-    """PA adds 2 and SE 3 slots to each GO/GD (PC48 §6.6)."""
+    """PA adds 2 and SE 3 slots to each GO/GD (PC48 §6.6; the PCIx's GO and GD tables print them
+    as add-ons, which ``Interpreter.cost`` charges from the mode in force, and its PA and SE
+    leave ``pa_entered`` and ``se_entered`` alone)."""
     extra = 0
     if ix.pa_entered[index]:
         extra += 2
