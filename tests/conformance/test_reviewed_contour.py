@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import pytest
 
+from omsd.board.events import DoneEvent
 from omsd.board.harness import Harness
 
 
@@ -83,3 +84,23 @@ def test_aa_contour_still_waits_for_every_axis() -> None:
     assert h.position("X") == 0
     h.run()
     assert h.position("X") == 2050
+
+
+@pytest.mark.parametrize(
+    ("model", "sep", "start"), [("PC48-4", " ", "CX"), ("PCIX-004", ";", "CG")]
+)
+def test_an_am_contour_is_the_task_an_id_after_it_reports(model: str, sep: str, start: str) -> None:
+    """ID (PC48 §6.12): "In the AM mode, only the axes active in the most recent move will set
+    their done flags." Once CX runs as the contour axes' own task, the contour is that most
+    recent move: an ID after it sets X's and Y's done flags when the contour ends (3.05 s: the
+    2 s lead-in, the 1 s line, CE's ramp down), not Z's when the earlier task's move ends (it
+    went to Z's queue and reported Z at 5.1 s)."""
+    h = Harness(model)
+    cmds = ["AA", "VL1000,1000,1000,1000;", "AC10000,10000,10000,10000;", "AM", "MR,,5000;"]
+    cmds += ["GO", "AA", "CV1000", "CD1000,0;", "MT2000,0;", "CE", "AM", start, "ID", ""]
+    h.send(sep.join(cmds))
+    h.run()
+    done = [e for e in h.events() if isinstance(e, DoneEvent)]
+    assert [e.done_register for e in done] == [0b0011]
+    assert 3.0 < done[0].time < 3.2
+    assert h.errors() == []

@@ -117,9 +117,12 @@ def contour_task(ix: Interpreter, defn: ContourDefinition) -> list[Axis]:
     """The axes whose queues CX (and the PCIx's CG) goes to and meets in: every axis in AA, as
     an AA GO; in AM the contour's own, as an AM GO meets only the axes of its move ("a task may
     be performing coordination motion on 2 axes, while a second task is performing unrelated
-    but simultaneous motion on another axis")."""
+    but simultaneous motion on another axis"). In AM the contour is then the task's most recent
+    move, the one an ID, II or IP after it speaks for ("In the AM mode, only the axes active in
+    the most recent move will set their done flags"), as an AM move's axes are."""
     axes = ix.machine.axes
     if ix.mode == "AM":
+        ix.last_move = sorted(defn.axes)
         return [axes[i] for i in defn.axes]
     return list(axes)
 
