@@ -104,3 +104,19 @@ def test_an_am_contour_is_the_task_an_id_after_it_reports(model: str, sep: str, 
     assert [e.done_register for e in done] == [0b0011]
     assert 3.0 < done[0].time < 3.2
     assert h.errors() == []
+
+
+@pytest.mark.parametrize(("model", "sep"), [("PC48-4", " "), ("PCIX-004", ";")])
+def test_rc_of_an_am_contour_is_kept_while_another_starts(model: str, sep: str) -> None:
+    """RC: "While a contour is executing, the value computed to generate the appropriate lead in
+    will be returned." In AM a second contour, on Z, starts while X's runs (AM: "a task may be
+    performing coordination motion on 2 axes, while a second task is performing unrelated but
+    simultaneous motion on another axis"): X's RC stays its lead-in's 500 (1000 steps to reach
+    CV1000), Z's is its own 1000 (500 steps). It was 0 for X once Z's contour began."""
+    h = Harness(model)
+    h.send(sep.join(["AA", "CV1000", "CD1000,0;", "MT5000,0;", "CE", "AM", "CX", ""]))
+    h.until(0.5)
+    h.send(sep.join(["AA", "CV1000", "CD,,500,0;", "MT,,2000,0;", "CE", "AM", "CX", ""]))
+    h.until(0.7)
+    assert [number(h.send(f"A{a}{sep}RC{sep}")) for a in "XZ"] == [500, 1000]
+    assert h.errors() == []

@@ -149,7 +149,7 @@ def run_contour(ix: Interpreter, defn: ContourDefinition, t: float, command: str
     here = {a.index: a.position(tick) for a in axes}
     decel = min(a.ac for a in axes)
     p = plan(defn, here, decel)
-    ix.contour_lead = p.lead_in
+    ix.contour_lead.update(p.lead_in)  # (in AM another task's contour may still be running)
     for a in axes:
         a.begin(tick, p.pieces[a.index], Motion.CONTOUR, final=p.finals[a.index])
         v = a.traj.velocity(a.traj.end_time - 1e-9) if a.traj.pieces else 0.0
