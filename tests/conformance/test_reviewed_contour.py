@@ -120,3 +120,15 @@ def test_rc_of_an_am_contour_is_kept_while_another_starts(model: str, sep: str) 
     h.until(0.7)
     assert [number(h.send(f"A{a}{sep}RC{sep}")) for a in "XZ"] == [500, 1000]
     assert h.errors() == []
+
+
+def test_pcix_rc_in_a_contour_is_the_whole_number_meant() -> None:
+    """The lead-in to (100,100) at CV1000: 1000² / (2 × 141.42…) along the diagonal, 2500 steps/s²
+    on each axis, which floating point computes as 2499.9999999999995. RC reports the number
+    meant, as the PC48 does and as RC and RV do elsewhere (docs/decisions.md, "RV and RC are
+    whole numbers of the value meant"); the PCIx's gave 2499 for the whole contour."""
+    h = Harness("PCIX-004")
+    h.send("AA;CV1000;CD100,100;MT200,100;CE;CX;")
+    h.until(0.1)
+    assert h.send("RC;") == b"2500, 2500, 0, 0\n\r"
+    assert h.errors() == []

@@ -3,7 +3,6 @@ PC48 (RQ, RC, RU, RE, PE, PP, RL, EA, CA, AN/AF, SW/BW, PH/PL, PA, SE, WS, BX, R
 
 from __future__ import annotations
 
-import math
 from decimal import Decimal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
@@ -14,6 +13,7 @@ from omsd.dialects.pcix.common import (
 )
 from omsd.dialects.shared.io import aux
 from omsd.dialects.shared.loops import while_sync
+from omsd.dialects.shared.reports import whole
 from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
@@ -40,9 +40,10 @@ def _rc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "2000000, 2000000, 2000000, 2000000": the acceleration now, "zero when the stage is
     stopped or running at constant speed" (unlike the PC48, which reports the ramp's). "While a
     contour is executing, the value computed to generate the appropriate lead in will be
-    returned", for the whole contour as on the PC48."""
+    returned", for the whole contour as on the PC48; the whole number meant, as the PC48's
+    (``whole``: a lead-in's share of 2500 computed as 2499.9999999999995 is 2500)."""
     axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
-    reply(ix, ", ".join(str(math.trunc(_acceleration(ix, a, t))) for a in axes), t)
+    reply(ix, ", ".join(str(whole(_acceleration(ix, a, t))) for a in axes), t)
 
 
 def _acceleration(ix: Interpreter, axis: Axis, t: float) -> float:
