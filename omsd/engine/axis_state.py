@@ -165,7 +165,8 @@ class AxisState:
         self.limit_latched: int = 0  # direction of the limit last run into, for the status
         # ramping down from a limit in the soft-limit mode (SL): the switch it runs past is what
         # it is reacting to (reactions._limit); cleared by new motion and at rest (Axis.begin,
-        # settle, halt: a move started without begin, omsd.engine.follow_on, starts from rest)
+        # settle, halt: a move started without begin, omsd.engine.follow_on, starts from rest;
+        # gearing.follow, which gives a geared axis its master's motion without begin)
         self.limit_ramp = False
         self.hold_goal = 0.0
         self.in_position = True

@@ -61,6 +61,7 @@ def follow(slave: AxisState, master: AxisState, now: float) -> None:
     pieces = pf.pieces_between(master.traj, now, math.inf, gear.ratio)
     path = pf.Trajectory(now, 0.0, pieces)
     gear.base, gear.path = ideal, path
+    slave.limit_ramp = False  # (its motion is the master's copy now, not a soft-limit ramp)
     if not pieces:
         slave.traj = pf.Trajectory.at_rest(now, float(math.floor(ideal + 0.5)))
         slave.motion = Motion.IDLE

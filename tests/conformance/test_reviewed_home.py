@@ -19,6 +19,7 @@ from omsd.board.events import LimitEvent
 from omsd.board.harness import Harness
 from omsd.board.world import AxisWorld
 
+from .pcix import reply
 from .support import physical
 
 #: A stage whose positive limit is 3000 steps out and whose home switch is at 1000..1100.
@@ -110,3 +111,23 @@ def test_after_the_soft_limit_ramp_the_limit_stops_the_next_move(model: str, sep
     h.run()
     assert limits(h) == [("X", 1), ("X", 1)]
     assert 3400 <= position(h, sep) <= 3600  # where the ramp ended: the second move never ran
+
+
+def test_an_axis_geared_during_its_soft_limit_ramp_is_stopped_by_the_limit() -> None:
+    """PCIx TX: "Set up the current axis so that it tracks the X axis" (immediate); EG:
+    gearing is cancelled by "over-travel on the geared axis"; LN: "if the axis encounters a
+    limit switch in the course of executing any motion, the axis will be instructed to stop and
+    the host will be notified of the event". Y, ramping down beyond its switch in the soft-limit
+    mode, is geared to X; X's move would carry it further out: the switch, still active, stops
+    it at once and the host is told. The mark of the soft-limit ramp stayed on the geared axis,
+    and X's move carried Y 5000 steps beyond its switch, unheard."""
+    h = Harness("PCIX-400", world={"Y": SHORT})
+    h.send("AY;SL;AC400000;VL20000;MR10000;GO;")
+    h.until(0.18)
+    assert limits(h) == [("Y", 1)]
+    h.send("AY;TX;")
+    h.send("AX;AC400000;VL20000;MR5000;GO;")
+    h.run()
+    assert limits(h) == [("Y", 1)]
+    assert 3000 <= h.position("Y") <= 3100
+    assert h.send("AY;EG?;") == reply("=egf")
