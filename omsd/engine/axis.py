@@ -112,7 +112,11 @@ class Axis(AxisState):
             elif abs(v) <= base:
                 self.halt(t)  # (at or below the base velocity: it drops to rest at once)
                 return
+        # a stop of the soft-limit mode's own ramp down (ST typed while it runs) is that same
+        # ramp at AC: it runs on past the switch it reacts to (limit_ramp), heard once
+        ramp = self.limit_ramp
         self.begin(t, pf.velocity_change(v, math.copysign(base, v), self.ac), motion)
+        self.limit_ramp = ramp
 
     # -- what happens next --------------------------------------------------------------------
 

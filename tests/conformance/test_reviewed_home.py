@@ -113,6 +113,24 @@ def test_after_the_soft_limit_ramp_the_limit_stops_the_next_move(model: str, sep
     assert 3400 <= position(h, sep) <= 3600  # where the ramp ended: the second move never ran
 
 
+@pytest.mark.parametrize(("model", "sep"), BOARDS)
+def test_a_stop_during_the_soft_limit_ramp_ramps_on(model: str, sep: str) -> None:
+    """SL: "ramp down instead of terminating immediately" (PC48 §6.5; PCIx SL: "ramp an axis to
+    a stop rather than abruptly killing the motion when a limit switch is encountered"). An ST
+    typed while that ramp runs beyond the switch ramps down as the axis already does, at AC: the
+    switch it runs past is still the one the ramp reacts to, met once and reported once. The ST
+    stopped the axis dead on its first sample (about 3050 instead of 3500) and the host heard of
+    the same limit a second time."""
+    h = Harness(model, world={"X": SHORT})
+    typed(h, "AX SL AC400000 VL20000 MR10000 GO ", sep)
+    h.until(0.18)  # the switch at 3000 was met at about 0.175 s: ramping down beyond it
+    assert limits(h) == [("X", 1)]
+    typed(h, "ST ", sep)
+    h.run()
+    assert limits(h) == []
+    assert 3400 <= position(h, sep) <= 3600
+
+
 def test_an_axis_geared_during_its_soft_limit_ramp_is_stopped_by_the_limit() -> None:
     """PCIx TX: "Set up the current axis so that it tracks the X axis" (immediate); EG:
     gearing is cancelled by "over-travel on the geared axis"; LN: "if the axis encounters a
