@@ -44,7 +44,11 @@ def _jog(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
         axis.vl = abs(v)  # "This command modifies the move velocity parameter (VL)"; 0 stops
     ramp = pf.velocity_change(v0, v, axis.ac)
     if v == 0.0:
+        # JG0 of the soft-limit mode's ramp down (a PCIx jog's) is that same ramp at AC, as an
+        # ST's is (Axis.decelerate): it runs on past the switch it reacts to (limit_ramp)
+        limit_ramp = axis.limit_ramp
         axis.begin(tick, ramp, Motion.STOP)
+        axis.limit_ramp = limit_ramp and axis.moving
         return motion_wait(axis)
     axis.direction = 1 if v > 0 else -1
     axis.begin(tick, [*ramp, pf.cruise(v)], Motion.JOG)

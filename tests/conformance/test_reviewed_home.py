@@ -8,7 +8,9 @@
   and trips the switch" (PC48 §4.3; the VS4's the same); "if the axis encounters a limit switch
   in the course of executing any motion, the axis will be instructed to stop and the host will
   be notified of the event" (PCIx LN). Such a ramp ran on through the switch with no limit
-  event. The soft-limit mode's own ramp down (SL) still runs on beyond the switch.
+  event. The soft-limit mode's own ramp down (SL) still runs on beyond the switch, and so does
+  a stop of it (ST, JG0: the same ramp at AC); what comes after it (a queued move, gearing to
+  another axis) is stopped by the switch again.
 """
 
 from __future__ import annotations
@@ -149,3 +151,22 @@ def test_an_axis_geared_during_its_soft_limit_ramp_is_stopped_by_the_limit() -> 
     assert limits(h) == [("Y", 1)]
     assert 3000 <= h.position("Y") <= 3100
     assert h.send("AY;EG?;") == reply("=egf")
+
+
+def test_jg0_during_the_soft_limit_ramp_of_a_jog_ramps_on() -> None:
+    """PCIx SL: "ramp an axis to a stop rather than abruptly killing the motion when a limit
+    switch is encountered ... This mode is effective for point to point and JG moves only"; JG:
+    "will accelerate to the programmed velocity at the current AC rate and run until altered by
+    an ST, SA, KL, HF (servo models), another JG command, or a limit switch". JG0, typed to end
+    the jog while the soft-limit ramp runs beyond the switch, ramps down as the axis already
+    does, at AC, as ST does (above): the limit is met and reported once, and the axis stops
+    about 2000 steps beyond the switch. JG0 stopped it dead on its first sample (3199) and the
+    host heard of the same limit a second time."""
+    h = Harness("PCIX-400", world={"X": SHORT})
+    h.send("AX;SL;AC100000;JG20000;")
+    h.until(0.26)  # at speed at 0.2 s; the switch at 3000 met at 0.25 s
+    assert limits(h) == [("X", 1)]
+    h.send("JG0;")
+    h.run()
+    assert limits(h) == []
+    assert 4900 <= h.position("X") <= 5100
