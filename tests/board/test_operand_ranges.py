@@ -359,7 +359,7 @@ PCIX_PROBES: dict[tuple[str, int], Probe] = {
     ("SI", 1): probe("AA;SI{v},;"),
     ("LO", 1): probe("AX;LO{v};", query("AX;RP;"), reply("{i}")),
     ("LP", 1): probe("AX;LP{v};", query("AX;RP;"), reply("{i}")),
-    ("LPE", 1): probe("AX;LPE{v};", query("AX;RP;"), reply("{i}")),
+    ("LPE", 1): probe("AX;LPE{v};", query("AX;RE;"), reply("{i}")),  # (the encoder)
     ("CL", 1): probe("AX;CL{v};", attr("hold"), is_(lambda v: v != 0)),
     ("LS", 1): probe("AX;LS{v};", lambda h: len(h.board.interpreter.loops[0]), is_(lambda v: 1)),
     ("MA", 1): probe("AX;MA{v};", pending, is_(whole)),

@@ -741,8 +741,9 @@ def test_per_axis_queries_are_not_valid_in_multi_axis_mode(query: str) -> None:
 def test_closed_loop_and_encoder_load_commands_the_client_sends() -> None:
     """omsBaseController::writeInt32 / writeFloat64: ``A? CL1`` / ``A? CL0`` (firmware 1.30 and
     later; HN/HF before) and ``A? LPE%d;`` (set the encoder position). CL closes and opens the
-    servo loop as HN/HF do; LPE loads the encoder (and the position counter, as LP does on an
-    encoder axis) and must not be read as LP0 followed by an unknown ``E``."""
+    servo loop as HN/HF do; LPE loads the encoder (on this servo, whose position is its encoder,
+    the position counter too; a stepper's stays: test_reviewed_max_family.py) and must not be
+    read as LP0 followed by an unknown ``E``."""
     h = Harness(MODEL)
     h.send("AX CL1\n")
     assert reply(h, "AX CL?\n") == "=on"

@@ -160,3 +160,20 @@ def test_omsmaxnet_parsers_read_closed_loops_and_encoders(model: str) -> None:
     assert done.RI[0] == "MDNN" and done.PP[0] == -3000
     assert abs(done.PE[0] + 3000) <= 1 and done.EA[0][2] != "S"
     assert int(receive(h, "AX;RE;")) == done.PE[0]
+
+
+@pytest.mark.parametrize(("model", "motor"), [("PCIX-040", 100), ("PCIX-400", -100)])
+def test_lpe_loads_the_encoder_apart_from_the_motor_position(model: str, motor: int) -> None:
+    """``epics-motor/motorOmsAsyn`` ``omsBaseController.cpp`` sets an axis's motor position with
+    ``LP`` and its encoder position with ``"A? LPE%d;"``, and ``ronaldomercado/motorOms``
+    ``devOmsCom.cc`` loads the two apart: ``sprintf(motor_call->message, "LO%ld LPE%ld;", ref,
+    fdbk);``. On a stepper with an encoder (PCIX-040) LPE loads the encoder alone, as the
+    PCIx's LO "sets the motor position independently of the encoder position" (it loaded the
+    position counter too: RP read -100); on a servo (PCIX-400) the position is the encoder, and
+    both read the last load, as after LO."""
+    h = Harness(model)
+    h.send("AX LO100 LPE-100;\n")
+    h.advance(0.1)
+    assert int(receive(h, "AX;RE;")) == -100
+    assert int(receive(h, "AX;RP;")) == motor
+    assert h.errors() == []

@@ -72,10 +72,11 @@ Every answer is read from the board's state at the moment of the query; only ``#
 
 ``LPE#`` — load the encoder position
     omsBaseController::writeFloat64: ``"A? LPE%d;"`` sets the encoder position of an axis with
-    an encoder: the PCIx's LP on that axis ("the parameter will be loaded into the encoder
-    position register and the parameter times the encoder ratio will be loaded into the
-    position counter"). Without this row the PCIx would read ``LP`` (loading 0!) and an unknown
-    ``E``.
+    an encoder, where it sends ``LP`` for the motor position; devOmsCom.cc loads the two apart,
+    ``"LO%ld LPE%ld;"``. So on a stepper with an encoder LPE loads the encoder alone (the
+    mirror of the PCIx's LO, "sets the motor position independently of the encoder
+    position"); on a servo, whose position is its encoder, it is LP, as LO there loads both.
+    Without this row the PCIx would read ``LP`` (loading 0!) and an unknown ``E``.
 
 ``PSO`` / ``PSE`` / ``PSM`` — select the motor type of the current axis
     The MAX-family setters matching ``PS?``'s answers (drvMAXv.cc sets ``typeID`` to ``PSM``,
@@ -88,6 +89,8 @@ Every answer is read from the board's state at the moment of the query; only ``#
 """
 
 from __future__ import annotations
+
+import math
 
 from omsd.dialects.interpreter import Interpreter
 from omsd.dialects.shared.table import Handler
@@ -181,12 +184,24 @@ def _closed_loop(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 
 def _load_encoder(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """LPE# = LP# on the current axis (an axis with an encoder)."""
+    """LPE#: the encoder position of the current axis. On a stepper with an encoder, the encoder
+    alone, as the PCIx's LO loads the motor position alone: the clients load the two apart
+    (devOmsCom.cc ``"LO%ld LPE%ld;"``; omsBaseController sends ``LP`` to set the motor position
+    and ``LPE`` to set the encoder's). On a servo, whose position is its encoder, and on an axis
+    without an encoder, LP."""
     value = ix.one(cmd)
     assert value is not None
     axis = ix.axis
     n = ix.check("LPE", ix.convert(axis, value, "dist"))
-    ix.enqueue([(axis, Op("LP", (n,), ix.cost(cell, axis)))])
+    if axis.is_servo or not axis.has_encoder:
+        ix.enqueue([(axis, Op("LP", (n,), ix.cost(cell, axis)))])
+        return
+
+    def load(a: Axis, when: float) -> None:
+        a.anchor_encoder(when, float(math.trunc(n)))
+        a.hold_goal = float(a.encoder(when))  # (a hold holds where the axis is)
+
+    ix.enqueue([(axis, Op("SET", ("LPE", load), ix.cost(cell, axis)))])
 
 
 def _motor_select(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
