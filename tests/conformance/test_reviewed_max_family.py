@@ -25,8 +25,10 @@ base class) and ``omsAsynApp/src/omsMAXnet.cpp``:
 * ``getFirmwareVersion``: ``count = sscanf(p, "ver:%d.%d.%d,", &fwMajor, &fwMinor, &fwRevision);
   ... if ((p == NULL) || (count < 2))``.
 
-None of these failed when this file was written: the review found no reply of the PCIx
-personality these parsers misread (see ``docs/decisions.md``, "MAX-family extension").
+None of the parsers' tests failed when this file was written: the review found no reply of
+the PCIx personality these parsers misread. What it found was what a command does: LPE, which
+the clients send to set the encoder position apart from the motor's, loaded the motor position
+too (the last test; ``docs/decisions.md``, "MAX-family extension").
 """
 
 from __future__ import annotations
