@@ -167,3 +167,14 @@ def test_a_duplicate_names_both_places(tmp_path: Path) -> None:
 def test_errors_stay_one_line() -> None:
     error = ConfigError("f.toml", 'x."a\nb"', "expected a\rb", line=2)
     assert str(error) == 'f.toml:2: x."a\\nb": expected a\\rb'
+
+
+@pytest.mark.parametrize("value", ["[" * 5000 + "]" * 5000, "{a = " * 2000 + "1" + "}" * 2000])
+def test_values_nested_too_deeply_for_the_parser_are_one_line(tmp_path: Path, value: str) -> None:
+    """tomllib parses nested arrays and inline tables by recursion: thousands of levels ran out
+    of Python's stack, a RecursionError's traceback where a one-line error belongs."""
+    path = tmp_path / "omsd.toml"
+    path.write_text(f"[[board]]\ntcp = 7001\nname = {value}\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value) == f"{path}: invalid TOML: arrays or inline tables nested too deeply"

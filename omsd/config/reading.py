@@ -53,6 +53,9 @@ def read(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
         line, column = int(m.group(2)), int(m.group(3))
         detail = f"invalid TOML: {m.group(1)}"
         raise ConfigError(source, None, detail, line=line, column=column) from None
+    except RecursionError:  # tomllib parses nesting by recursion: thousands of levels
+        detail = "invalid TOML: arrays or inline tables nested too deeply"
+        raise ConfigError(source, None, detail) from None
     return text, document
 
 
