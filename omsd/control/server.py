@@ -36,7 +36,7 @@ from omsd.faults import Faults
 from omsd.files import group_id
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Traffic, TrafficLog
-from omsd.transport import Endpoint
+from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
 MAX_WAIT = 3600.0
@@ -91,8 +91,7 @@ class ControlServer:
     async def listen_tcp(self, host: str, port: int) -> tuple[str, int]:
         server = await asyncio.start_server(self._connection, host, port, limit=MAX_LINE)
         self.servers.append(server)
-        address = server.sockets[0].getsockname()
-        return str(address[0]), int(address[1])
+        return bound_address(server, host)
 
     async def close(self) -> None:
         for server in self.servers:

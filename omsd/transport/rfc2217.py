@@ -27,6 +27,7 @@ from typing import Any
 
 from omsd.pacing import Line, Pacer
 from omsd.service import BoardService
+from omsd.transport import bound_address
 from omsd.transport.tcp import READ_SIZE, TcpClient
 
 IAC = b"\xff"
@@ -318,9 +319,9 @@ async def serve_rfc2217(
     server = await loop.create_server(
         lambda: Rfc2217Client(service, label[0], policy, pacing), host, port, reuse_address=True
     )
-    bound = server.sockets[0].getsockname()
+    bound = bound_address(server, host)
     label[0] = f"rfc2217:{bound[0]}:{bound[1]}"
-    return server, str(bound[0]), int(bound[1])
+    return server, *bound
 
 
 __all__ = ["Rfc2217Client", "VirtualPort", "serve_rfc2217"]

@@ -25,6 +25,7 @@ import os
 from typing import cast
 
 from omsd.service import BoardService
+from omsd.transport import bound_address
 from omsd.transport.terminal import Terminal, terminal_for
 
 # Bytes queued for a client that does not read before further output is dropped (logged once).
@@ -247,6 +248,6 @@ async def serve_tcp(
     server = await loop.create_server(
         lambda: TcpClient(service, label[0], policy, terminal), host, port, reuse_address=True
     )
-    bound = server.sockets[0].getsockname()
+    bound = bound_address(server, host)
     label[0] = f"tcp:{bound[0]}:{bound[1]}"
-    return server, str(bound[0]), int(bound[1])
+    return server, *bound

@@ -36,6 +36,7 @@ from omsd.config import WebConfig, is_loopback
 from omsd.control.protocol import MAX_LINE, READ_ONLY_OPS
 from omsd.control.server import ControlServer
 from omsd.telemetry.traffic import TrafficLog
+from omsd.transport import bound_address
 
 STATIC = importlib.resources.files("omsd.web") / "static"
 """The page's files (package data)."""
@@ -139,12 +140,12 @@ class WebServer:
         site = web.TCPSite(runner, self.config.listen.host, self.config.listen.port)
         try:
             await site.start()
+            server = site._server
+            assert isinstance(server, asyncio.Server)
+            host, port = bound_address(server, self.config.listen.host)
         except BaseException:
             await self.close()
             raise
-        server = site._server
-        assert isinstance(server, asyncio.Server)
-        host, port = server.sockets[0].getsockname()[:2]
         self.address = (host, port)
         return host, port
 

@@ -9,14 +9,17 @@ socket are not there.
 from __future__ import annotations
 
 import os
+import re
+import resource
 import socket
 import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from .process import Omsd, run_omsd
+from .process import Omsd, daemon_env, run_omsd
 
 
 @pytest.fixture(autouse=True)
@@ -94,6 +97,31 @@ def test_the_default_control_socket_and_runtime_directory_go_too(
     line = failed(run_omsd("--tcp", f"127.0.0.1:{first}", "--tcp", f"127.0.0.1:{busy}"))
     assert line == f"omsd: board1: cannot listen on tcp 127.0.0.1:{busy}: address already in use"
     nothing_left(tmp_path, _runtime, first, _runtime / "control.sock")
+
+
+def test_more_boards_than_file_descriptors(tmp_path: Path, _runtime: Path) -> None:
+    """Out of file descriptors, asyncio's create_server skips the socket it cannot make without
+    a word: the server listened nowhere and omsd died on an IndexError's traceback."""
+    first = free_port()
+    path = tmp_path / "many.toml"
+    boards = "".join('[[board]]\ntcp = "127.0.0.1:0"\n' for _ in range(200))
+    path.write_text(f'[[board]]\nname = "first"\ntcp = "127.0.0.1:{first}"\n{boards}')
+    command = [sys.executable, "-m", "omsd", "--config", str(path), "--control", "off"]
+    result = subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        timeout=30,
+        env=daemon_env(),
+        cwd=tmp_path,
+        stdin=subprocess.DEVNULL,
+        preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (100, 100)),
+    )
+    line = failed(result)
+    assert re.fullmatch(
+        r"omsd: board\d+: cannot listen on tcp 127\.0\.0\.1:0: too many open files", line
+    ), line
+    nothing_left(tmp_path, _runtime, first)
 
 
 def test_a_log_that_cannot_be_opened(tmp_path: Path, _runtime: Path) -> None:
