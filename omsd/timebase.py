@@ -17,6 +17,9 @@ from collections.abc import Callable
 
 MIN_SCALE = 1e-3
 MAX_SCALE = 1e3
+MAX_TIME = 1e12
+"""Board seconds a stepped clock may reach (31,700 years): the clock is a float, and from about
+1e16 s on it has no room left for the sample grid (a move reported done without moving)."""
 
 
 class Timebase:
@@ -57,6 +60,10 @@ class Timebase:
             raise ValueError("time must be paused to step it")
         if not seconds >= 0.0:
             raise ValueError(f"time steps forward: {seconds} s")
+        if self._board + seconds > MAX_TIME:
+            raise ValueError(
+                f"a step of {seconds} s would pass the clock's limit, {MAX_TIME:g} s of board time"
+            )
         self._board += seconds
         self._real = self.source()
 

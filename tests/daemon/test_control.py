@@ -230,6 +230,27 @@ def test_time_cannot_step_while_running_and_scale_is_bounded(bench: Callable[...
     assert (clock["paused"], clock["scale"]) == (False, 1.0)
 
 
+def test_a_step_that_would_take_the_clock_past_its_precision_is_refused(
+    bench: Callable[..., Bench],
+) -> None:
+    """A step of 1e300 s was taken: the board's clock, a float, then had no room left for its
+    samples, and a move of 1000 steps reported done at once with RP still 0, for good."""
+    b = bench()
+    c = b.connect()
+    b.ctl.pause()
+    before = b.ctl.state()["time"]
+    for seconds in (1e300, 1e17):
+        with pytest.raises(ControlError, match="would pass"):
+            b.ctl.step(seconds)
+    assert b.ctl.state()["time"] == before
+    assert b.ctl.step(1e6)["time"] == before + 1e6  # a long step is still a step
+    b.ctl.scale(1000.0)
+    b.ctl.resume()
+    assert c.ask(b"AX VL100000 AC1000000 MR1000 GO ID WY") == WY
+    c.expect(b"!\x01\n")
+    assert c.ask(b"AX RP") == b"1000"
+
+
 def test_scale_makes_board_time_run_ten_times_as_fast(bench: Callable[..., Bench]) -> None:
     b = bench()
     assert b.ctl.scale(10.0)["clock"]["scale"] == 10.0
