@@ -123,12 +123,20 @@ def encode(message: dict[str, Any]) -> bytes:
 
 def decode(line: bytes) -> dict[str, Any]:
     try:
-        message = json.loads(line)
+        message = json.loads(line, parse_constant=_not_json)
     except (ValueError, UnicodeDecodeError) as exc:
         raise ControlError(f"not a JSON object: {exc}") from None
+    except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
+        raise ControlError("not a JSON object: nested too deeply") from None
     if not isinstance(message, dict):
         raise ControlError("not a JSON object")
     return message
+
+
+def _not_json(name: str) -> Any:
+    """Python's json reads NaN and Infinity, which JSON has not (and a reply echoing them in its
+    id could not be written)."""
+    raise ValueError(f"{name} is not JSON")
 
 
 def merge(state: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:

@@ -721,6 +721,11 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
             (b"this is not json\n", None, "JSON"),
             (b"[1, 2]\n", None, "JSON"),
             (b'{"id":8}\n', 8, "unknown op"),
+            # not JSON, and no reply at all before: the reply, echoing the id, could not be
+            # written (NaN), or Python's stack ran out (a RecursionError)
+            (b'{"id":NaN,"op":"boards"}\n', None, "NaN"),
+            (b'{"id":10,"op":"slip","axis":"X","steps":-Infinity}\n', None, "Infinity"),
+            (b"[" * 30000 + b"\n", None, "nested too deeply"),
         ]:
             reply = raw_request(s, reader, line)
             assert reply["id"] == ident and reply["ok"] is False, reply
