@@ -671,6 +671,8 @@ def _arguments(payload: object) -> dict[str, Any]:
         value = json.loads(text)
     except ValueError as exc:
         raise ControlError(f"payload: not a JSON object: {exc}") from None
+    except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
+        raise ControlError("payload: not a JSON object: nested too deeply") from None
     if not isinstance(value, dict):
         raise ControlError("payload: expected a JSON object of the operation's arguments")
     return value

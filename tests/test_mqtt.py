@@ -597,6 +597,21 @@ async def test_command_errors_come_back_on_the_reply_topic(broker: int) -> None:
         assert replies[6][1]["result"]["board"] == "xy"
 
 
+async def test_a_payload_nested_too_deeply_is_answered(broker: int) -> None:
+    """Thousands of nested [ ran json's recursion out of stack: the command's task died on a
+    RecursionError, and no reply came."""
+    async with running(broker) as run, subscribed(broker) as sub:
+        await connected(run)
+        await sub.wait("xy/state")
+        await sub.publish("omsd/xy/cmd/limit", b"[" * 30000)
+        reply = (await sub.wait("xy/reply/limit")).json()
+        assert reply == {
+            "id": None,
+            "ok": False,
+            "error": "payload: not a JSON object: nested too deeply",
+        }
+
+
 async def test_a_retained_command_is_ignored(broker: int) -> None:
     async with subscribed(broker) as sub:  # left on the broker before the daemon starts
         await sub.publish(
