@@ -402,7 +402,13 @@ def _seconds(text: str) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+    try:
+        return _main(sys.argv[1:] if argv is None else argv)
+    except KeyboardInterrupt:  # Ctrl-C before the daemon's own handler (imports, the file)
+        return 130
+
+
+def _main(argv: list[str]) -> int:
     if argv[:1] == ["ctl"]:
         from omsd.ctl import main as ctl_main
 

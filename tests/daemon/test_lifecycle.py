@@ -11,12 +11,15 @@ import json
 import os
 import signal
 import socket
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import pytest
 import serial
 
-from .process import TIMEOUT, Omsd
+from .process import TIMEOUT, Omsd, daemon_env
 
 STOP_SIGNALS = [signal.SIGTERM, signal.SIGINT]
 
@@ -38,6 +41,38 @@ def test_signal_stops_cleanly(omsd: Omsd, tmp_path: Path, sig: signal.Signals) -
     # it no longer accepts
     with pytest.raises(OSError):
         socket.create_connection((host, port), timeout=TIMEOUT).close()
+
+
+def test_ctrl_c_while_the_configuration_is_read_is_status_130(tmp_path: Path) -> None:
+    """Ctrl-C before the daemon ran (its modules imported, its file read) ended in a
+    KeyboardInterrupt's traceback and death by SIGINT, where the help promises status 130.
+    The file is a FIFO: omsd waits in its read, where the signal is sure to find it."""
+    fifo = tmp_path / "omsd.toml"
+    os.mkfifo(fifo)
+    command = [sys.executable, "-m", "omsd", "--config", str(fifo), "--control", "off"]
+    env = {**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)}
+    process = subprocess.Popen(
+        command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+    )
+    try:
+        deadline = time.monotonic() + TIMEOUT
+        while True:  # until omsd has the FIFO open for reading
+            try:
+                writer = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+                break
+            except OSError:
+                assert time.monotonic() < deadline, "omsd never opened its configuration"
+                time.sleep(0.01)
+        try:
+            process.send_signal(signal.SIGINT)
+            out, err = process.communicate(timeout=TIMEOUT)
+        finally:
+            os.close(writer)
+    finally:
+        process.kill()
+        process.wait()
+    assert b"Traceback" not in err, err.decode()
+    assert (process.returncode, out, err) == (130, b"", b"")
 
 
 @pytest.mark.parametrize("sig", STOP_SIGNALS, ids=lambda s: s.name)
