@@ -295,6 +295,11 @@ def test_refused_by_the_daemon_exit_1(running: Running) -> None:
     assert "baud" in running.fails(1, "fault", "--baud", "10")
     assert "bit" in running.fails(1, "input", "99", "low")
     assert "no axis 'Q'" in running.fails(1, "encoder", "Q", "5")
+    # a timeout past the daemon's bound: the client's own socket timeout overflowed (a
+    # traceback, exit status 1) before the daemon could refuse it
+    assert "timeout: expected 0 to 3600.0 s" in running.fails(
+        1, "wait", "idle", "--timeout", "1e99"
+    )
 
 
 @pytest.mark.parametrize(

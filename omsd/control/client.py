@@ -30,7 +30,15 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from omsd.control.protocol import DEFAULT_RATE, MAX_LINE, ControlError, decode, encode, merge
+from omsd.control.protocol import (
+    DEFAULT_RATE,
+    MAX_LINE,
+    MAX_WAIT,
+    ControlError,
+    decode,
+    encode,
+    merge,
+)
 from omsd.defaults import default_pty_link
 
 _UNSET: Any = object()
@@ -271,7 +279,13 @@ class Control:
 
     def _wait(self, board: str | None, timeout: float, **args: Any) -> dict[str, Any]:
         result: dict[str, Any] = self.call(
-            "wait", reply_within=timeout + 5.0, board=board, timeout=timeout, **args
+            # the daemon refuses a timeout past MAX_WAIT at once (and 1e99 s is more than a
+            # socket's timeout can be)
+            "wait",
+            reply_within=min(timeout, MAX_WAIT) + 5.0,
+            board=board,
+            timeout=timeout,
+            **args,
         )
         return result
 

@@ -75,6 +75,7 @@ from typing import Any, Protocol
 MAX_LINE = 64 * 1024  # a request longer than this is refused (and the connection closed)
 DEFAULT_RATE = 10.0  # state messages a second of a subscription, at most, unless told
 MAX_RATE = 50.0
+MAX_WAIT = 3600.0  # seconds a ``wait`` may be given, at most
 
 OPS = (
     "boards",

@@ -24,6 +24,7 @@ from typing import Any
 from omsd.board.events import Event
 from omsd.control.protocol import (
     MAX_LINE,
+    MAX_WAIT,
     OPS,
     STREAM_OPS,
     ControlError,
@@ -39,7 +40,6 @@ from omsd.telemetry.traffic import Traffic, TrafficLog
 from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
-MAX_WAIT = 3600.0
 POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
 
 
