@@ -32,6 +32,10 @@ from omsd.transport.tcp import READ_SIZE, TcpClient
 
 IAC = b"\xff"
 
+MAX_SUBOPTION = 1024
+"""Bytes of one subnegotiation (IAC SB ... IAC SE) kept, at most: RFC 2217's are a few bytes
+(a baud rate is four), and PortManager kept all a client sent until IAC SE, were it gigabytes."""
+
 # The buffer every RFC 2217 connection reads into (see omsd.transport.tcp's, same reasoning: the
 # loop calls get_buffer and buffer_updated back to back on its one thread).
 _READ_BUFFER = memoryview(bytearray(READ_SIZE))
@@ -272,7 +276,7 @@ class Rfc2217Client(TcpClient):
         if IAC not in data and manager.mode == normal and manager.suboption is None:
             return data  # no telnet in it: the bytes are the data (what filter would yield)
         try:
-            return b"".join(manager.filter(data))
+            data = b"".join(manager.filter(data))
         except (KeyError, IndexError, ValueError) as exc:  # a setting PortManager cannot map
             self.service.log.warning(
                 f"{self.service.name}: {self.label}: RFC 2217: ignored a bad request ({exc!r})"
@@ -280,6 +284,10 @@ class Rfc2217Client(TcpClient):
             manager.mode = normal
             manager.suboption = None
             return b""
+        suboption = manager.suboption
+        if suboption is not None and len(suboption) > MAX_SUBOPTION:
+            del suboption[MAX_SUBOPTION:]  # the rest, up to IAC SE, is dropped
+        return data
 
     # -- out: escaped, and paced --------------------------------------------------------------
 

@@ -147,6 +147,46 @@ async def test_on_the_wire_the_board_s_0xff_is_doubled() -> None:
         service.close()
 
 
+async def test_a_subnegotiation_that_never_ends_is_held_to_a_bound() -> None:
+    """pyserial's PortManager keeps what follows IAC SB until IAC SE: a client that sent IAC SB
+    and then megabytes had every one of them kept (the daemon grew by what it was sent). Only
+    the first bytes are kept; what is inside the subnegotiation still never reaches the board,
+    and the board answers what follows it."""
+    service, _, recorder = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    longest = 0
+
+    def watch() -> bool:
+        nonlocal longest
+        for client in service.clients:
+            suboption = getattr(getattr(client, "manager", None), "suboption", None)
+            if suboption is not None:
+                longest = max(longest, len(suboption))
+        return False
+
+    def raw() -> bytes:
+        with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+            sock.sendall(b"\xff\xfa\x2c\x01")  # IAC SB COM-PORT SET-BAUDRATE ...
+            for _ in range(64):
+                sock.sendall(b"A" * 65536)
+            sock.sendall(b"\xff\xf0WY")  # IAC SE
+            got = b""
+            while not got.endswith(b"PC48 ver 3.00-4\n"):
+                got += sock.recv(4096)
+            return got
+
+    watching = asyncio.ensure_future(until(watch, timeout=30))
+    try:
+        got = await in_thread(raw)
+        assert got.endswith(b"PC48 ver 3.00-4\n")
+        assert recorder.received() == b"WY"
+        assert 0 < longest <= 2 * 65536, longest  # not the 4 MiB sent
+    finally:
+        watching.cancel()
+        server.close()
+        service.close()
+
+
 async def test_plain_tcp_stays_byte_transparent() -> None:
     service, _, recorder = make_service(eos=0xFF)
     server, _, port = await serve_tcp(service, "127.0.0.1", 0, "takeover")
