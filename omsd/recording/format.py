@@ -349,6 +349,8 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
                 truncated = True  # the writer was killed in the middle of its last line
                 break
             raise RecordingError(f"{where}: not a JSON object: {exc.msg}") from None
+        except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
+            raise RecordingError(f"{where}: not a JSON object: nested too deeply") from None
         if not isinstance(record, dict) or not isinstance(record.get("kind"), str):
             raise RecordingError(f"{where}: not a record: expected an object with a kind")
         kind = record["kind"]

@@ -230,6 +230,8 @@ BAD_FILES = {
     "empty.jsonl": ("", "no traffic in the file"),
     "text.jsonl": ("WY\nPC48 ver 3.00-4\n", "text.jsonl:1: not a JSON object"),
     "list.jsonl": ("[1, 2]\n{}\n", "list.jsonl:1: not a record"),
+    # json's recursion ran out of stack: a RecursionError's traceback, exit status 1
+    "deep.jsonl": ("[" * 100000 + "\n{}\n", "deep.jsonl:1: not a JSON object: nested too deeply"),
     "untimed.jsonl": ('{"kind": "traffic", "dir": "in"}\n{}\n', "untimed.jsonl:1: traffic"),
     "header2.jsonl": (
         '{"t": 0, "kind": "info", "message": "x"}\n{"t": 0, "kind": "header", "format": 1}\n',
