@@ -43,6 +43,10 @@ def test_signal_stops_cleanly(omsd: Omsd, tmp_path: Path, sig: signal.Signals) -
         socket.create_connection((host, port), timeout=TIMEOUT).close()
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_while_the_configuration_is_read_is_status_130(tmp_path: Path) -> None:
     """Ctrl-C before the daemon ran (its modules imported, its file read) ended in a
     KeyboardInterrupt's traceback and death by SIGINT, where the help promises status 130.
@@ -52,7 +56,15 @@ def test_ctrl_c_while_the_configuration_is_read_is_status_130(tmp_path: Path) ->
     command = [sys.executable, "-m", "omsd", "--config", str(fifo), "--control", "off"]
     env = {**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)}
     process = subprocess.Popen(
-        command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env
+        command,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        # Ctrl-C as a terminal delivers it: a test run started in the background by a shell
+        # without job control (a CI runner's, `pytest &`) ignores SIGINT, and so would omsd,
+        # which Python starts with the disposition it inherits
+        preexec_fn=_default_sigint,
     )
     try:
         deadline = time.monotonic() + TIMEOUT
