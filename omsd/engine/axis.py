@@ -29,15 +29,24 @@ class Axis(AxisState):
     # -- motion -------------------------------------------------------------------------------
 
     def begin(
-        self, t: float, pieces: list[pf.Piece], motion: Motion, final: float | None = None
+        self,
+        t: float,
+        pieces: list[pf.Piece],
+        motion: Motion,
+        final: float | None = None,
+        *,
+        limit_ramp: bool = False,
     ) -> None:
         """Start new motion on tick ``t`` from wherever the axis is then (position and
         velocity). Until ``t`` the axis goes on as it was: asking for the position between now
-        and the tick must not show the future."""
+        and the tick must not show the future. ``limit_ramp``: the new motion is a stop of the
+        soft-limit mode's own ramp down, that same ramp at AC (ST, JG0), which keeps its mark
+        (``AxisState.limit_ramp``) while it moves; any other motion clears it."""
         if self.gear is not None:  # a geared axis moves only as its master does
             return
         host = self.host
         self.source = host.talker
+        keep_ramp = limit_ramp and self.limit_ramp
         self.limit_ramp = False
         from_rest = self.motion is Motion.IDLE
         now = min(host.now, t)
@@ -54,6 +63,7 @@ class Axis(AxisState):
                 prefix = [pf.cruise(0.0, t - now)] if t > now else []
             self.traj = Trajectory(now, x_now, [*prefix, *pieces], final)
             self.motion = motion
+            self.limit_ramp = keep_ramp
             if motion is not Motion.HOLD:
                 self.in_position = False
         if (
@@ -114,9 +124,8 @@ class Axis(AxisState):
                 return
         # a stop of the soft-limit mode's own ramp down (ST typed while it runs) is that same
         # ramp at AC: it runs on past the switch it reacts to (limit_ramp), heard once
-        ramp = self.limit_ramp
-        self.begin(t, pf.velocity_change(v, math.copysign(base, v), self.ac), motion)
-        self.limit_ramp = ramp
+        ramp = pf.velocity_change(v, math.copysign(base, v), self.ac)
+        self.begin(t, ramp, motion, limit_ramp=True)
 
     # -- what happens next --------------------------------------------------------------------
 

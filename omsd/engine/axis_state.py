@@ -167,7 +167,8 @@ class AxisState:
         # it is reacting to (reactions._limit); cleared by new motion and at rest (Axis.begin,
         # settle, halt: a move started without begin, omsd.engine.follow_on, starts from rest;
         # gearing.follow, which gives a geared axis its master's motion without begin); kept by
-        # a stop of that ramp, the same ramp at AC (Axis.decelerate: ST, SA, SD; JG0)
+        # a stop of that ramp, the same ramp at AC (Axis.begin's limit_ramp, given by
+        # Axis.decelerate: ST, SA, SD; and by JG0)
         self.limit_ramp = False
         self.hold_goal = 0.0
         self.in_position = True

@@ -46,9 +46,7 @@ def _jog(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if v == 0.0:
         # JG0 of the soft-limit mode's ramp down (a PCIx jog's) is that same ramp at AC, as an
         # ST's is (Axis.decelerate): it runs on past the switch it reacts to (limit_ramp)
-        limit_ramp = axis.limit_ramp
-        axis.begin(tick, ramp, Motion.STOP)
-        axis.limit_ramp = limit_ramp and axis.moving
+        axis.begin(tick, ramp, Motion.STOP, limit_ramp=True)
         return motion_wait(axis)
     axis.direction = 1 if v > 0 else -1
     axis.begin(tick, [*ramp, pf.cruise(v)], Motion.JOG)
