@@ -96,11 +96,11 @@ class AxisState:
         "event", "gear", "has_encoder", "hd", "hg", "hold", "hold_goal", "home", "home_encoder",
         "home_high", "home_last_phys", "host", "hv", "in_arm", "in_fire", "in_position", "index",
         "is_servo", "letter", "limit_high", "limit_latched", "limit_ramp", "limits_on", "motion",
-        "outputs", "pa", "pending", "phys_offset", "queue", "quiet_memo", "ramp", "ratio", "se_ms",
-        "sensor_check", "servo", "servo_last", "servo_trip_reported", "setpoint_offset",
-        "slip_detect", "slip_kill", "slipped", "soft_limit", "source", "stall_phys",
-        "track_counter", "track_enc", "tracking", "traj", "travel_limits", "uu", "vb", "vl", "wait",
-        "world",
+        "outputs", "pa", "pending", "phys_offset", "queue", "quiet_known", "quiet_memo", "ramp",
+        "ratio", "se_ms", "sensor_check", "servo", "servo_last", "servo_trip_reported",
+        "setpoint_offset", "slip_detect", "slip_kill", "slipped", "soft_limit", "source",
+        "stall_phys", "track_counter", "track_enc", "tracking", "traj", "travel_limits", "uu",
+        "vb", "vl", "wait", "world",
     )
     # fmt: on
 
@@ -186,6 +186,9 @@ class AxisState:
         self.event: tuple[float, str] | None = None
         # where the queue can take the axis, kept by omsd.engine.quiet (a Plan)
         self.quiet_memo: Any = None
+        # whether the axis was found quiet, and the machine's outside_epoch then
+        # (Machine._find_wakeup)
+        self.quiet_known: tuple[int, bool] | None = None
         self.host.deadline_stale = True
 
     def factory_parameters(self) -> None:

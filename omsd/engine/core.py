@@ -47,9 +47,9 @@ class Core:
         "_by_letter", "_output", "_sources", "after_events", "axes", "clock", "contour",
         "contour_velocity", "deadline", "deadline_stale", "directions", "fast_paths",
         "flash_defaults", "flash_macros", "flash_writer", "framing", "front", "init_until",
-        "input_source", "model", "now", "options", "outputs_low", "plain_sensing", "ramp_tables",
-        "registers", "rest_epoch", "scurves", "settled", "talker", "wakeup", "wakeup_stale",
-        "world",
+        "input_source", "model", "now", "options", "outputs_low", "outside_epoch", "plain_sensing",
+        "ramp_tables", "registers", "rest_epoch", "scurves", "settled", "talker", "wakeup",
+        "wakeup_stale", "world",
     )
     # fmt: on
 
@@ -89,6 +89,11 @@ class Core:
         # register read or write and a report that changes something (Board._reports_at_rest);
         # the replies a board at rest keeps are good for one count (Board._replies)
         self.rest_epoch = 0
+        # how many times the machine may have been changed from outside (a command, a change of
+        # the world, a reset): bumped by unsettle() and by a settle that is not Machine.advance's
+        # own; what an axis was found to be, quiet or heard, is known until it changes
+        # (AxisState.quiet_known)
+        self.outside_epoch = 0
         self.options = options
         self.framing = framing
         # the flash (non-volatile store) of a card that has one: saved power-up defaults (None:
@@ -171,6 +176,7 @@ class Core:
         when the board must next be run (``wakeup_stale``)."""
         self.settled = False
         self.rest_epoch += 1
+        self.outside_epoch += 1
         self.wakeup_stale = True
 
     # -- output -------------------------------------------------------------------------------

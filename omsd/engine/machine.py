@@ -173,10 +173,19 @@ class Machine(Core):
             if axis.gear is not None:
                 return deadline
         codes = self._quiet_codes
+        epoch = self.outside_epoch
         best: float | None = None
         for axis in axes:
             t = axis.next_event_time()
-            if t is None or (best is not None and t >= best) or quiet(axis, codes):
+            if t is None or (best is not None and t >= best):
+                continue
+            # what each axis was found to be is known until it is changed from outside
+            # (omsd.engine.quiet): a quiet axis stays quiet; one that is not may become quiet
+            # as its queue goes on, and is taken as heard until then (woken for: the safe side)
+            known = axis.quiet_known
+            if known is None or known[0] != epoch:
+                known = axis.quiet_known = (epoch, quiet(axis, codes))
+            if known[1]:
                 continue
             best = t
         return best
@@ -228,6 +237,8 @@ class Machine(Core):
             self.talker = 0
             return
         ex = self.executor
+        # (the reactions may change other axes than their own: no axis is known quiet after them)
+        self.outside_epoch += 1
         for axis in self.axes:
             event = axis.event
             if event is not None and event[0] > t:
@@ -263,7 +274,14 @@ class Machine(Core):
         front = self.front
         skip_idle = self.fast_paths
         codes = self._follow_on_codes
-        self.unsettle()
+        if self.after_events:
+            # the settle after an instant's events, Machine.advance's own: what changes is the
+            # machine going its own way, not a change from outside (outside_epoch)
+            self.settled = False
+            self.rest_epoch += 1
+            self.wakeup_stale = True
+        else:
+            self.unsettle()
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:
@@ -294,6 +312,9 @@ class Machine(Core):
             if not progressed:
                 self.settled = front.holds_nothing()
                 return
+            # (a queued command ran: it may change other axes than its own, so no axis is known
+            # quiet after it; a move that follows on changes its own axis alone, and keeps it so)
+            self.outside_epoch += 1
 
     # -- registers ------------------------------------------------------------------------------
 

@@ -21,8 +21,12 @@ pure: running it to ``t`` at once or deadline by deadline is the same), so repli
 those of a board woken at every deadline.
 
 :meth:`~omsd.engine.machine.Machine.next_wakeup` is the earliest deadline of the axes that are
-not quiet. Everything here is conservative: an axis that might be heard is not quiet, and the
-board is woken at its every deadline, as before.
+not quiet. It is found again after every instant's events, but an axis found quiet is not asked
+again until the machine is changed from outside (``Core.outside_epoch``: a command, a change of
+the world, a reset) or runs something other than a move that follows on (a reaction or a queued
+command may change other axes than its own): what it does meanwhile is what the plan said.
+Everything here is conservative: an axis that might be heard is not quiet, and the board is
+woken at its every deadline, as before.
 """
 
 from __future__ import annotations

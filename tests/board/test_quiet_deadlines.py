@@ -233,6 +233,42 @@ def test_a_board_running_queued_moves_is_woken_only_for_what_can_be_heard() -> N
     assert pair.heard["lazy"][-2][0].text == b"0"  # 15 back and forth: home again
 
 
+def test_an_axis_found_quiet_is_not_asked_again_until_changed_from_outside(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Issue 16: the wake-up is found again after every instant's events, but an axis found
+    quiet stays so while it goes its own way (its queued moves following on), so it is not
+    asked again until the board is changed from outside (a command). The load's board: U, V,
+    R, S run queued moves (quiet); X, Y, Z, T jog towards their switches (heard, and asked
+    each time where their deadline is the earliest so far)."""
+    import omsd.engine.machine as machine_module
+
+    board = load_board()
+    board.advance(1.0)  # the jogs at speed
+    asked: list[str] = []
+    real = machine_module.quiet
+
+    def counting(axis: Any, codes: Any) -> bool:
+        asked.append(axis.letter)
+        return bool(real(axis, codes))
+
+    monkeypatch.setattr(machine_module, "quiet", counting)
+    board.receive(b"AX VL5000;", board.now, 1)  # a command: the quiet axes are asked again
+    wakeup = board.next_wakeup()
+    assert wakeup is not None and wakeup > 3000.0
+    assert set("UVRS") <= set(asked)
+    asked.clear()
+    for _ in range(20):  # twenty instants of moves ending and the next starting
+        deadline = board.next_deadline()
+        assert deadline is not None and deadline < 20.0
+        board.advance(deadline)
+        assert board.next_wakeup() == wakeup
+    assert not set("UVRS") & set(asked)
+    board.receive(b"AX VL5000;", board.now, 1)
+    assert board.next_wakeup() == wakeup
+    assert set("UVRS") <= set(asked)
+
+
 def test_what_can_be_heard_is_woken_for_at_its_deadline() -> None:
     """A done, a limit: the wake-up is the deadline itself."""
     board = Board(get_model("PC48-4"), world=WORLD)
