@@ -231,3 +231,21 @@ def test_s9_negative_backlash_is_out_of_range_on_a_stepper_axis() -> None:
     assert errors(h) == [(ErrorKind.OUT_OF_RANGE, "BC-10")]
     got = [enter(h, f"A{a};", "?BC") for a in "XYZ"]
     assert got == [reply("bc0"), reply("bc5"), reply("bc7")]
+
+
+@pytest.mark.parametrize(
+    ("line", "query", "y"),
+    [("EGX;", "=egx", 1000), ("EGX2;", "=egx2", 2000), ("EGX1,2;", "=egx1,2", 500)],
+)
+def test_eg_inline_forms(line: str, query: str, y: int) -> None:
+    """The EG page's inline examples: "EGX; gears the current axis to the X axis using a ratio
+    of 1 to 1", "EGX2; ... with a ratio of 2 to 1", "EGX1,2; ... with a gear ratio of 1 to 2"
+    ("the ratio of geared axis motion to master axis motion"). Y geared to X follows X's
+    1000-count move by the ratio; EG? names the form entered."""
+    h = quiet("PCIX-004")
+    assert enter(h, "AY;", line) == b""
+    assert enter(h, "EG?") == reply(query)
+    enter(h, "AX;", "VL10000;", "MR1000;", "GO;")
+    h.run()
+    assert enter(h, "AA;", "RP") == reply(f"1000,{y},0,0")
+    assert errors(h) == []
