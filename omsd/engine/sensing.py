@@ -29,17 +29,28 @@ SWITCH_MARGIN = 2.0
 def next_event(axis: AxisState) -> tuple[float, str]:
     """The earliest of what happens next to the axis and when; ``(inf, "")``: nothing. Of
     several at the same time, the first in this order."""
+    # (written out, one test each, in that order: found for every move a poll sees begin)
     best, what = math.inf, ""
-    for when, kind in (
-        (axis.end_tick(), "end"),
-        (axis.sensor_check, "sensor"),
-        (axis.in_fire, "in"),
-        (axis.aux_timer, "aux"),
-        (axis.outputs[0][0] if axis.outputs else None, "output"),
-        (axis.servo_check_time(), "servo"),
-    ):
+    when = axis.end_tick()
+    if when is not None and when < best:
+        best, what = when, "end"
+    when = axis.sensor_check
+    if when is not None and when < best:
+        best, what = when, "sensor"
+    when = axis.in_fire
+    if when is not None and when < best:
+        best, what = when, "in"
+    when = axis.aux_timer
+    if when is not None and when < best:
+        best, what = when, "aux"
+    if axis.outputs:
+        when = axis.outputs[0][0]
+        if when < best:
+            best, what = when, "output"
+    if axis.servo is not None:
+        when = axis.servo_check_time()
         if when is not None and when < best:
-            best, what = when, kind
+            best, what = when, "servo"
     wait = axis.wait
     if wait is not None and wait.until is not None and wait.until < best:
         best, what = wait.until, "wait"
