@@ -104,7 +104,10 @@ the prose; it restricts the single-axis form only.
 * "feedback" (servo or stepper with encoder): HN ("For servo axes … For stepper with encoder
   feedback axes"), HF ("for stepper with an encoder axis. If the current axis is a servo"), HE
   ("enables encoder index, and phase A and B signals"), RE ("current encoder position"), EA
-  ("encoder status"), IP ("within the specified step encoder dead band").
+  ("encoder status"). Not IP: its page says "within the specified step encoder dead band" but
+  also "If the position hold (HN) is not enabled for an axis, the command will behave like an
+  ID command for that axis", and drops the older boards' "This command is available only in
+  models with the encoder option": on an open-loop axis it is ID.
 * "open_loop": GS ("this command is not valid in controls with encoder feedback which includes
   servo motors").
 * Everything else applies to every axis. MO in particular: the PC48 page says "This command is
@@ -441,7 +444,7 @@ PCIX_COMMANDS: dict[str, CommandSpec] = {
         _c("ID", False, q(1), q(1), q(1)),
         _c("II", False, NV, q(1)),
         _c("IN", True, q(3), q(3)),
-        _c("IP", False, q(1), q(1), motor=_FEEDBACK),
+        _c("IP", False, q(1), q(1)),
         # 5.9.6 velocity stair casing
         _c("FP", True, flush(3) + _STOP, NV),
         _c("MM", False, q(1), NV),

@@ -252,7 +252,9 @@ SERVO |= {"?KA", "?KB", "?KD", "?KF", "?KI", "?KO", "?KP", "?KU", "?KV", "?SO", 
 # (?PM, in §5.6.2's servo list, answers on every axis: docs/decisions.md, omsMAXnet)
 STEPPER_ENCODER = {"HD", "HG", "HV", "?HD", "?HG", "?HV", "ER", "?ER", "ES", "?ES", "IS", "ET"}
 STEPPER_ENCODER |= {"TN", "TF", "?SK"}
-FEEDBACK = {"HN", "HF", "HE", "RE", "EA", "IP"}
+# (IP is on every axis: "If the position hold (HN) is not enabled for an axis, the command will
+# behave like an ID command for that axis")
+FEEDBACK = {"HN", "HF", "HE", "RE", "EA"}
 
 
 def test_motor_types() -> None:

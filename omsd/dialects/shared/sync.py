@@ -75,8 +75,11 @@ def _ip(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("IP", (), ix.cost(cell, ix.axis)))])
         return
-    # VS4 AA form: like ID, DON_S once every encoder axis of the task is in position
-    members = [i for i in _task_axes(ix) if machine.axes[i].has_encoder]
+    # VS4 AA form: like ID, DON_S once every encoder axis of the task is in position; where
+    # IP is valid on any axis (the PCIx: "If the position hold (HN) is not enabled for an
+    # axis, the command will behave like an ID command for that axis"), every axis of the task
+    any_axis = not ix.commands["IP"].encoder_only and ix.commands["IP"].motor is None
+    members = [i for i in _task_axes(ix) if any_axis or machine.axes[i].has_encoder]
     group = SyncGroup(set(members), barrier=False)
     group.action = machine.executor.done_action
     ix.enqueue(
