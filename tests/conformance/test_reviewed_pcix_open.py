@@ -3,6 +3,9 @@ second reading found omsd wrong.
 
 * IP on an axis without an encoder behaves like ID: "If the position hold (HN) is not enabled for
   an axis, the command will behave like an ID command for that axis"; it was a command error.
+* A bare flag command in AA/AM (``AA;LN;``) affects no axis, as ``AA;AF;`` already did: §5.1 "If
+  a parameter exists for an axis, then the command affects that axis and if the parameter does
+  not exist for that axis, then the command has no effect on that axis"; it acted on every axis.
 """
 
 from __future__ import annotations
@@ -11,6 +14,7 @@ import pytest
 
 from omsd.board.harness import Harness
 
+from .pcix import reply
 from .support import done_events
 
 
@@ -29,3 +33,55 @@ def test_ip_on_an_open_loop_axis_behaves_like_id(mode: str) -> None:
     events = done_events(h)
     assert len(events) == 1
     assert events[0].done_register == (0b1 if mode == "AX;" else 0b1111)
+
+
+@pytest.mark.parametrize("command", ["LN", "LF", "SL", "SF", "HH", "HL", "UF", "HN", "CA"])
+def test_a_bare_flag_command_in_aa_mode_affects_no_axis(command: str) -> None:
+    """§5.1: "These commands require numeric parameters in multi-axis modes, and the parameters
+    indicate whether or not to take action for each axis. If a parameter exists for an axis, then
+    the command affects that axis and if the parameter does not exist for that axis, then the
+    command has no effect on that axis" (its example is LN); AF's page in AA: "AF1,,1; ... The Y
+    axis is unchanged". The first command's opposite is set on each axis, then the bare command
+    is typed in AA: each axis keeps what it had."""
+    h = Harness("PCIX-040")  # steppers with encoders: UU and ER apply
+    opposite = {
+        "LN": ("LF", "?LM", "lf"),
+        "LF": ("LN", "?LM", "ln"),
+        "SL": ("SF", "?SL", "sf"),
+        "SF": ("SL", "?SL", "sl"),
+        "HH": ("HL", "?HS", "hl"),
+        "HL": ("HH", "?HS", "hh"),
+        "UF": ("UU2", "?UU", "uu2.000000"),
+        "HN": ("HF", "?PM", "hf"),
+    }
+    if command == "CA":
+        h.send("AA;MR10,10,10,10;GO;ID;")
+        h.advance(0.1)
+        h.send("CA;")
+        assert h.board.registers.done == 0b1111  # (it was 0: every flag cleared)
+    else:
+        setting, query, answer = opposite[command]
+        for letter in "XYZT":
+            h.send(f"A{letter};{setting};")
+        h.send(f"AA;{command};")
+        for letter in "XYZT":
+            assert h.send(f"A{letter};{query};") == reply(answer)
+    assert h.errors() == []
+
+
+def test_aa_hf_bare_still_opens_every_loop() -> None:
+    """HF's own page says otherwise: "If the current mode is multi-axis, all axes will go into
+    open-loop mode" ("HF; AA-AM 2")."""
+    h = Harness("PCIX-400")
+    h.send("AA;HN1,1,1,1;HF;")
+    for letter in "XYZT":
+        assert h.send(f"A{letter};?PM;") == reply("hf")
+    assert h.errors() == []
+
+
+def test_aa_af_bare_still_affects_no_axis() -> None:
+    """The rule AF already followed ("AF1,,1; ... The Y axis is unchanged")."""
+    h = Harness("PCIX-040")
+    h.send("AA;AF;AX;")
+    assert h.send("?AB;") == reply("an")
+    assert h.errors() == []

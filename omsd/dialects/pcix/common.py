@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from decimal import Decimal
+from typing import Literal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.pcix.interpreter import PcixInterpreter
@@ -42,15 +43,19 @@ def executes(code: str) -> Callable[[OpFunction], OpFunction]:
     return register
 
 
-def flag_axes(ix: Interpreter, cmd: Command) -> list[Axis]:
-    """``LN;`` / ``LNb,b,b,b;``: the current axis in single-axis mode; in AA/AM "If a parameter
-    exists for an axis, then the command affects that axis" (no parameters at all: every axis)."""
+def flag_axes(ix: Interpreter, cmd: Command, bare: Literal["none", "all"] = "none") -> list[Axis]:
+    """``LN;`` / ``LNb,b,b,b;``: the current axis in single-axis mode; in AA/AM §5.1: "If a
+    parameter exists for an axis, then the command affects that axis and if the parameter does
+    not exist for that axis, then the command has no effect on that axis", so with no parameters
+    at all no axis (``bare="none"``; as AN/AF). A page that says otherwise passes
+    ``bare="all"`` (HF: "If the current mode is multi-axis, all axes will go into open-loop
+    mode")."""
     if ix.mode == "single" and ix.contour is None:
         if cmd.fields and any(f is not None for f in cmd.fields):
             raise CommandFailed(ErrorKind.TOO_MANY_PARAMETERS)
         return [ix.axis]
     if not cmd.fields:
-        return list(ix.machine.axes)
+        return list(ix.machine.axes) if bare == "all" else []
     picked: list[Axis] = []
     for i, text in enumerate(cmd.fields):
         if i < len(ix.machine.axes) and text is not None:

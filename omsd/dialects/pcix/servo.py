@@ -118,9 +118,12 @@ def _q_pm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _hn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """HN closes a servo loop or starts a stepper's position maintenance; HF opens / stops it.
     ``HNb,b,b,b;`` in AA/AM: "a null value in the argument list specifies feedback for that axis
-    is not to be" changed; with no list every axis with feedback (HF: "If the current mode is
-    multi-axis, all axes will go into open-loop mode")."""
-    axes = [a for a in flag_axes(ix, cmd) if a.has_encoder]
+    is not to be" changed; with no list, HN no axis (§5.1's rule, ``flag_axes``) and HF every
+    axis with feedback (HF: "If the current mode is multi-axis, all axes will go into open-loop
+    mode"; its table prints "HF; AA-AM 2")."""
+    axes = [
+        a for a in flag_axes(ix, cmd, "all" if cmd.mnemonic == "HF" else "none") if a.has_encoder
+    ]
     if ix.mode != "single" and not axes:
         return
     # HN: 1 unit, "2 for servo" axes
