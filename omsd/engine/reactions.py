@@ -47,7 +47,8 @@ def on_sensor(ex: Executor, axis: Axis, t: float) -> None:
         take_up_backlash(axis, t)
     for hook in ex.sensor_hooks:
         hook(ex, axis, t)
-    if axis.motion is not Motion.IDLE and axis.limits_on and not axis.limit_ramp:
+    limits = axis.limits_on or axis.travel_limits is not None
+    if axis.motion is not Motion.IDLE and limits and not axis.limit_ramp:
         direction = axis.direction_at(t)
         if direction and _limit_seen(axis, direction, t):
             _limit(ex, axis, direction, t)
@@ -121,7 +122,11 @@ def _limit_seen(axis: Axis, direction: int, t: float) -> bool:
     motion, the axis will be instructed to stop" (PCIx LN). A ramp down (ST, JG0, SP, the
     deceleration after home) runs into the switches; the travel limits are for moves and jogs
     (``sensing._travel_levels``). The soft-limit mode's own ramp down is not stopped again by
-    the switch it is reacting to (``limit_ramp``)."""
+    the switch it is reacting to (``limit_ramp``). LF turns the switches off, not the PCIx's
+    travel limits ("Software overtravel limits and physical limit switch inputs can be enabled
+    at the same time"; "TL0,0; Turns software limits off")."""
+    if not axis.limits_on:
+        return axis.beyond_travel_limit(direction, t)
     if axis.motion is Motion.STOP:
         return axis.limit_switch_active(direction, t)
     return axis.limit_active(direction, t)

@@ -132,8 +132,8 @@ def _levels(axis: AxisState, t: float) -> list[tuple[float, bool]]:
             levels.append(_step_at_or_above(w.positive_limit - off))
         if p > w.negative_limit:  # active from the first step at or below it
             levels.append(_step_at_or_below(w.negative_limit - off))
-        if axis.travel_limits is not None:
-            levels.extend((level - off, above) for level, above in _travel_levels(axis, t))
+    if axis.travel_limits is not None:  # (on with the switches off too: TL0,0 ends them, not LF)
+        levels.extend((level - off, above) for level, above in _travel_levels(axis, t))
     if axis.home is not None:
         if axis.home.index_points:
             x = axis.phys(t)

@@ -723,17 +723,13 @@ def test_tl_negative_limit() -> None:
     assert h.send("RA") == b"MNLN\n\r"
 
 
-def test_tl_off_with_tl0_0_and_under_lf() -> None:
-    """ "TL0,0; Turns software limits off"; LF: limits "have no effect on motion" (but are
-    reported)."""
+def test_tl_off_with_tl0_0() -> None:
+    """ "TL0,0; Turns software limits off". (LF does not: the switches only,
+    tests/conformance/test_reviewed_pcix_open.py.)"""
     h = Harness("PCIX-004")
     h.send("AX;TL1000,-1000;TL0,0;MR5000;GO;")
     h.run()
     assert rp(h) == 5000 and only(h.events(), LimitEvent) == []
-    h.send("AY;TL1000,-1000;LF;MR5000;GO;")
-    h.run()
-    assert rp(h, "Y") == 5000 and only(h.events(), LimitEvent) == []
-    assert h.send("AY;QA") == b"PNLN\n\r"
 
 
 def test_tl_soft_limit_mode_ramps_down() -> None:

@@ -6,13 +6,18 @@ second reading found omsd wrong.
 * A bare flag command in AA/AM (``AA;LN;``) affects no axis, as ``AA;AF;`` already did: §5.1 "If
   a parameter exists for an axis, then the command affects that axis and if the parameter does
   not exist for that axis, then the command has no effect on that axis"; it acted on every axis.
+* LF leaves the software travel limits (TL) on: LF "disables the limit switches"; TL's page
+  "Software overtravel limits and physical limit switch inputs can be enabled at the same time"
+  and "TL0,0; Turns software limits off"; LF switched them off too.
 """
 
 from __future__ import annotations
 
 import pytest
 
+from omsd.board.events import LimitEvent
 from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
 
 from .pcix import reply
 from .support import done_events
@@ -85,3 +90,37 @@ def test_aa_af_bare_still_affects_no_axis() -> None:
     h.send("AA;AF;AX;")
     assert h.send("?AB;") == reply("an")
     assert h.errors() == []
+
+
+def limit_events(h: Harness) -> list[LimitEvent]:
+    return [e for e in h.events() if isinstance(e, LimitEvent)]
+
+
+@pytest.mark.parametrize("mode", ["LN;", "LF;"])
+def test_lf_leaves_the_software_travel_limits_on(mode: str) -> None:
+    """LF "disables the limit switches for the addressed axis or axes"; TL: "If the axis reaches
+    either of these logical limits, the PCIX will flag a limit condition", "Software overtravel
+    limits and physical limit switch inputs can be enabled at the same time", "TL0,0; Turns
+    software limits off". Each has its own switch: with the switches off (LF) a move past the
+    travel limit is still stopped there and reported, as with LN (at VL10000 the first sample
+    beyond 1000 is at 1005)."""
+    h = Harness("PCIX-004")
+    h.send("AX;VL10000;TL1000,-1000;" + mode + "MR5000;GO;")
+    h.advance(2.0)
+    assert h.position("X") == 1005  # (with LF it was 5000: the travel limit ignored)
+    assert [e.direction for e in limit_events(h)] == [1]
+    assert h.errors() == []
+
+
+def test_lf_still_ignores_the_switches_with_travel_limits_set() -> None:
+    """LF: "the limit switch closure will have no effect on motion". The switch at 3000 lies
+    inside the travel limits: with LF the move runs through it to the end."""
+    h = Harness("PCIX-004", world={"X": AxisWorld(positive_limit=3000.0)})
+    h.send("AX;VL10000;TL100000,-100000;LF;MR5000;GO;")
+    h.advance(2.0)
+    assert h.position("X") == 5000
+    assert limit_events(h) == []
+    h.send("LN;MR-1000;GO;MR1000;GO;")  # back inside, then out again through the switch
+    h.advance(2.0)
+    assert h.position("X") == 4000  # moving away from an active limit is allowed...
+    assert [e.direction for e in limit_events(h)] == [1]  # ...toward it is not

@@ -58,9 +58,11 @@ Limits and positions
       flag a limit condition just as it would be using the physical limit switch inputs. Move
       Absolute (MA), Move Relative (MR), and Jog (JF, JG) commands are subject". The ?TL page says
       "If one of these limits is exceeded": a position *beyond* a limit is overtravel (a move to
-      the limit itself is allowed). It acts as a limit switch does: LN/LF enable it, RA shows
-      ``L`` while the position is beyond it, the axis stops (SF) or ramps down (SL) and its queue
-      is flushed, the limit event is raised. Point-to-point moves (GO, GD, GN, GU) and jogs
+      the limit itself is allowed). It acts as a limit switch does: RA shows ``L`` while the
+      position is beyond it, the axis stops (SF) or ramps down (SL) and its queue is flushed,
+      the limit event is raised. LF does not turn it off (LF "disables the limit switches";
+      "Software overtravel limits and physical limit switch inputs can be enabled at the same
+      time"): TL0,0 does. Point-to-point moves (GO, GD, GN, GU) and jogs
       (JG, JF, TM) are checked, other motion (homing, contours, stair-casing, gearing) is not.
       ``TL0,0;`` switches them off; a lower limit above the upper one is a range error. The range
       is the position range (the page prints 33,544,431, the LP page 33,554,431, a digit slip).
