@@ -86,6 +86,7 @@ from omsd.dialects.pcix.common import (
     handles,
     position,
 )
+from omsd.dialects.shared.sync import task_axes
 from omsd.engine import profiles as pf
 from omsd.engine.axis import Axis, HomeSearch, Motion, Wait
 from omsd.engine.backlash import set_backlash
@@ -223,12 +224,6 @@ def _op_gu(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     return Wait("motion")
 
 
-def _go_members(ix: Interpreter) -> list[int]:
-    if ix.mode == "AM" and ix.last_move:
-        return list(ix.last_move)
-    return list(range(len(ix.machine.axes)))
-
-
 @handles("GN")
 def _gn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """GN (§5.9.3): "initiate a move ... and set the axis done flags when the move is complete".
@@ -238,7 +233,7 @@ def _gn(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         axis = ix.axis
         ix.enqueue([(axis, Op("GO", (), ix.cost(cell, axis))), (axis, Op("GN", (), 0))])
         return
-    members = _go_members(ix)
+    members = task_axes(ix)
     go = SyncGroup(set(members))
     go.action = machine.executor.go_action
     go.data["gd"] = False

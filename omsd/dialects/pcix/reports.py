@@ -14,6 +14,7 @@ from omsd.dialects.pcix.common import (
 from omsd.dialects.shared.io import aux
 from omsd.dialects.shared.loops import while_sync
 from omsd.dialects.shared.reports import whole
+from omsd.dialects.shared.sync import task_axes
 from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
@@ -152,15 +153,17 @@ def _an(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("SW", "BW")
 def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    """Wait for general-purpose input # to go high (SW) or low (BW); in AA every axis waits."""
+    """Wait for general-purpose input # to go high (SW) or low (BW); in AA every axis waits, in AM
+    the task's."""
     machine = ix.machine
     bit = ix.integer(ix.one(cmd), cmd.mnemonic)
     args = (bit, cmd.mnemonic == "SW")
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("SW", args, ix.cost(cell, ix.axis)))])
         return
-    group = SyncGroup(set(range(len(machine.axes))))
-    ix.enqueue([(a, Op("SW", args, ix.cost(cell, a), group)) for a in machine.axes])
+    members = [machine.axes[i] for i in task_axes(ix)]  # AM: the task's axes
+    group = SyncGroup({a.index for a in members})
+    ix.enqueue([(a, Op("SW", args, ix.cost(cell, a), group)) for a in members])
 
 
 @handles("WS")

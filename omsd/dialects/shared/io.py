@@ -6,6 +6,7 @@ from __future__ import annotations
 from decimal import Decimal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
+from omsd.dialects.shared.sync import task_axes
 from omsd.dialects.shared.table import handles
 from omsd.engine.queue import Op, SyncGroup
 from omsd.models.spec import Cell
@@ -85,10 +86,11 @@ def _bit(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op(cmd.mnemonic, (bit,), ix.cost(cell, ix.axis)))])
         return
-    # AA/AM: the bit is set once every axis has reached it
-    group = SyncGroup(set(range(len(machine.axes))))
+    # AA: the bit is set once every axis has reached it; AM: once the task's axes have
+    members = [machine.axes[i] for i in task_axes(ix)]
+    group = SyncGroup({a.index for a in members})
     group.action = lambda g, when: machine.set_output(bit, low, when)
-    ix.enqueue([(a, Op("WA", (), ix.cost(cell, a), group)) for a in machine.axes])
+    ix.enqueue([(a, Op("WA", (), ix.cost(cell, a), group)) for a in members])
 
 
 @handles("BX")

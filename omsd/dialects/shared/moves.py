@@ -8,6 +8,7 @@ from decimal import Decimal
 
 from omsd.dialects.interpreter import CommandFailed, Interpreter
 from omsd.dialects.shared.contour import contour_line
+from omsd.dialects.shared.sync import task_axes
 from omsd.dialects.shared.table import handles
 from omsd.engine import profiles as pf
 from omsd.engine.axis import Axis, Motion
@@ -134,10 +135,7 @@ def _go(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         return
     # AA: every axis meets at the GO ("Each axis programmed to move will start together upon
     # executing the GO command"); AM: only the axes of the task just specified.
-    if ix.mode == "AM" and ix.last_move:
-        members = list(ix.last_move)
-    else:
-        members = list(range(len(machine.axes)))
+    members = task_axes(ix)
     group = SyncGroup(set(members))
     group.action = machine.executor.go_action
     group.data["gd"] = cmd.mnemonic == "GD"

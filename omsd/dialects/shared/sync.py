@@ -12,7 +12,12 @@ from omsd.protocol.lexer import Command
 # -- 6.12 move synchronization --------------------------------------------------------------------
 
 
-def _task_axes(ix: Interpreter) -> list[int]:
+def task_axes(ix: Interpreter) -> list[int]:
+    """The axes a multi-axis wait or meeting applies to: in AM the task's, the axes of its most
+    recent move ("a task may be performing coordination motion on 2 axes, while a second task
+    is performing unrelated but simultaneous motion on another axis", PC48 AM; ID: "In the AM
+    mode, only the axes active in the most recent move"); otherwise, and in AM before any move,
+    every axis ("In the AA mode, all axes will wait", WT)."""
     if ix.mode == "AM" and ix.last_move:
         return list(ix.last_move)
     return list(range(len(ix.machine.axes)))
@@ -38,7 +43,7 @@ def _id(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # stream, but the done flag in the status register will not be set until all axes have
     # executed the ID command. In the AM mode, only the axes active in the most recent move will
     # set their done flags."
-    members = _task_axes(ix)
+    members = task_axes(ix)
     group = SyncGroup(set(members), barrier=False)
     group.action = machine.executor.done_action
     ix.enqueue(
@@ -51,7 +56,7 @@ def _ii(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "Only those axes which have been supplied a parameter in the most recent move command will
     # cause interrupts."
     machine = ix.machine
-    members = [ix.axis_index] if ix.mode == "single" else (ix.last_move or _task_axes(ix))
+    members = [ix.axis_index] if ix.mode == "single" else (ix.last_move or task_axes(ix))
     ix.enqueue([(machine.axes[i], Op("II", (), ix.cost(cell, machine.axes[i]))) for i in members])
 
 
@@ -79,7 +84,7 @@ def _ip(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # IP is valid on any axis (the PCIx: "If the position hold (HN) is not enabled for an
     # axis, the command will behave like an ID command for that axis"), every axis of the task
     any_axis = not ix.commands["IP"].encoder_only and ix.commands["IP"].motor is None
-    members = [i for i in _task_axes(ix) if any_axis or machine.axes[i].has_encoder]
+    members = [i for i in task_axes(ix) if any_axis or machine.axes[i].has_encoder]
     group = SyncGroup(set(members), barrier=False)
     group.action = machine.executor.done_action
     ix.enqueue(
@@ -121,19 +126,24 @@ def _sw(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("SW", (bit,), ix.cost(cell, ix.axis)))])
         return
-    group = SyncGroup(set(range(len(machine.axes))))
-    ix.enqueue([(a, Op("SW", (bit,), ix.cost(cell, a), group)) for a in machine.axes])
+    # AA: every axis waits; AM: the task's axes, as its GO and ID
+    members = [machine.axes[i] for i in task_axes(ix)]
+    group = SyncGroup({a.index for a in members})
+    ix.enqueue([(a, Op("SW", (bit,), ix.cost(cell, a), group)) for a in members])
 
 
 @handles("WT")
 def _wt(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "In the AA mode, all axes will wait."
+    # "In the AA mode, all axes will wait." In AM only the task's axes do (the page names AA
+    # alone; AM "allows starting a task while some other task involving one or many axes is
+    # active", VS4 §6.1), as an AM GO meets only the axes of its move
     machine = ix.machine
     ms = ix.integer(ix.one(cmd), "WT")
     if ix.mode == "single":
         ix.enqueue([(ix.axis, Op("WT", (ms,), ix.cost(cell, ix.axis)))])
         return
-    group = SyncGroup(set(range(len(machine.axes))))
+    members = [machine.axes[i] for i in task_axes(ix)]
+    group = SyncGroup({a.index for a in members})
     group.action = machine.executor.wt_action
     group.data["ms"] = ms
-    ix.enqueue([(a, Op("WT", (ms,), ix.cost(cell, a), group)) for a in machine.axes])
+    ix.enqueue([(a, Op("WT", (ms,), ix.cost(cell, a), group)) for a in members])

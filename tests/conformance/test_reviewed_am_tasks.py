@@ -1,0 +1,85 @@
+"""AM tasks, power automatic and settling time, where a review against the manuals found omsd
+wrong (2026-11-27).
+
+* WT, SW, BL and BH in AM wait for the axes of the task only, as an AM GO, ID and CX already
+  did. The WT page: "In the AA mode, all axes will wait" (PC48 §6.12; the VS4's and the PCIx's
+  the same), naming AA alone; AM "allows several tasks to be managed simultaneously. For
+  instance, a task may be performing coordination motion on 2 axes, while a second task is
+  performing unrelated but simultaneous motion on another axis" (PC48 §6.4). They used to wait
+  for every axis, so an X task's `WT100` waited for an unrelated Z task's 5 s move to end.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from omsd.board.harness import Harness
+
+from .support import frame
+
+# X, Y, Z, T at 1000 steps/s and 10,000 steps/s²: a 1000-step move takes 1.1 s (0.1 s ramps)
+SETUP = ["AA", "VL1000,1000,1000,1000;", "AC10000,10000,10000,10000;"]
+MODELS = [("PC48-4", " "), ("VS4-040", " "), ("PCIX-004", ";")]
+
+
+def _two_tasks(model: str, sep: str, between: str) -> Harness:
+    """A Z task on a 5 s move, then an X task: ``MR1000; GO <between> MR1000; GO``."""
+    h = Harness(model)
+    cmds = [*SETUP, "AM", "MR,,5000;", "GO", "MR1000;", "GO", between, "MR1000;", "GO", ""]
+    h.send(sep.join(cmds))
+    return h
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+@pytest.mark.parametrize("between", ["WT100", "SW0"])
+def test_an_am_wait_holds_its_own_task_only(model: str, sep: str, between: str) -> None:
+    """WT: "In the AA mode, all axes will wait" (AA named, not AM); SW: "causes the axes to wait
+    until the general purpose input line has been released" (input 0 is released here). X's
+    first move ends at 1.1 s, the WT ends at 1.2 s, the second move at 2.3 s; Z's move (5 s)
+    runs on untouched. Before, X's second move waited for Z: X was still at 1000 at 3 s."""
+    h = _two_tasks(model, sep, between)
+    h.until(3.0)
+    assert h.position("X") == 2000
+    assert 2900 < h.position("Z") < 5000
+    h.run()
+    assert (h.position("X"), h.position("Z")) == (2000, 5000)
+    assert h.errors() == []
+
+
+def test_an_am_wt_lasts_its_time_from_the_task_s_arrival() -> None:
+    """The X task's WT100 starts when X gets there (1.1 s) and the next move 0.1 s later."""
+    h = _two_tasks("PC48-4", " ", "WT100")
+    h.until(1.19)
+    assert h.position("X") == 1000
+    h.until(1.25)
+    assert h.position("X") > 1000
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+def test_an_aa_wt_still_holds_every_axis(model: str, sep: str) -> None:
+    """In AA the WT is a meeting of every axis ("all axes will wait"), as before: an AA WT
+    between the AM tasks' moves holds X's second move until 0.1 s after Z's has ended."""
+    h = _two_tasks(model, sep, sep.join(["AA", "WT100", "AM"]))
+    h.until(4.9)
+    assert h.position("X") == 1000
+    h.run()
+    assert h.position("X") == 2000
+
+
+@pytest.mark.parametrize("model", ["PC48-4", "VS4-040"])
+@pytest.mark.parametrize(("bit", "low"), [("BL8;", True), ("BH8;", False)])
+def test_an_am_output_bit_waits_for_its_own_task_only(model: str, bit: str, low: bool) -> None:
+    """BL/BH ("AA - AM 2"), as in the manual's ``AX MA1000 GO BL10;``, set the bit after the
+    task's move: at 1.1 s, when X's move ends, not when Z's unrelated move does (5 s)."""
+    h = Harness(model)
+    if not low:
+        h.send("BL8;")
+    cmds = [*SETUP, "AM", "MR,,5000;", "GO", "MR1000;", "GO", bit, ""]
+    h.send(" ".join(cmds))
+    h.until(1.0)
+    assert bool(h.board.outputs_low >> 8 & 1) is not low
+    h.until(1.2)
+    assert bool(h.board.outputs_low >> 8 & 1) is low
+    assert h.position("Z") < 5000
+    if model == "PC48-4":
+        assert h.query("BX") == frame("000100" if low else "000000")
