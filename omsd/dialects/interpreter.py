@@ -192,8 +192,7 @@ class Interpreter(Operands, LoopStacks):
         # stop here, before the queued stop runs
         stopped = {axis.index: axis.motion for axis in self.machine.axes}
         for axis in self.machine.axes:
-            axis.halt(t)
-            axis.aux_timer = None
+            axis.halt(t)  # (a settling time under way runs on: the kill ends no power mode)
         self.stop(list(self.machine.axes), t, kill=True, stopped=stopped)
         self.contour = None
         self.wq = None

@@ -87,7 +87,10 @@ class Axis(AxisState):
         moved(self, t, None, None)
 
     def halt(self, t: float) -> None:
-        """Stop pulses at once (a kill, a hard limit, home found by a kill-at-home search)."""
+        """Stop pulses at once (a kill, a hard limit, home found by a kill-at-home search). A
+        motion stopped so has ended as one that runs out does: power automatic's output goes
+        back to its idle state (:meth:`power_down`)."""
+        ended = self.motion is not Motion.IDLE and self.motion is not Motion.HOLD
         self.servo_sync(t)
         self.note_direction(t)
         x = self.traj.position(t)
@@ -96,8 +99,21 @@ class Axis(AxisState):
         self.limit_ramp = False
         self.home = None
         self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
+        if ended:
+            self.power_down(t)
         self.invalidate()
         moved(self, t, None, None)
+
+    def power_down(self, t: float) -> None:
+        """The end of a motion in power-automatic mode: the auxiliary output, turned on "upon
+        the execution of the GO or GD", goes "off at the end of that move" (PC48 §6.6 PA; the
+        PCIx: "return to normal at the end"), after the settling time if SE gave one ("to be
+        used before the power is reduced")."""
+        if self.pa is not None and self.aux == self.pa:
+            if self.se_ms:
+                self.aux_timer = t + self.se_ms / 1000.0
+            else:
+                self.aux = not self.pa
 
     def decelerate(self, t: float, motion: Motion = Motion.STOP) -> None:
         """Ramp down to rest at the axis's acceleration (a stop, a soft limit, after home).

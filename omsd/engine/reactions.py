@@ -28,11 +28,7 @@ def on_end(ex: Executor, axis: Axis, t: float) -> None:
         if axis.slip_detect:
             axis.anchor_tracking(t)
     else:
-        if axis.pa is not None and axis.aux == axis.pa:
-            if axis.se_ms:
-                axis.aux_timer = t + axis.se_ms / 1000.0
-            else:
-                axis.aux = not axis.pa
+        axis.power_down(t)
         axis.hold_goal = axis.tracked_encoder(axis.position(t))
         axis.in_position = True
         ex.check_hold(axis, t)

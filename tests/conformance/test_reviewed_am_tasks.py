@@ -7,6 +7,12 @@ wrong (2026-11-27).
   instance, a task may be performing coordination motion on 2 axes, while a second task is
   performing unrelated but simultaneous motion on another axis" (PC48 §6.4). They used to wait
   for every axis, so an X task's `WT100` waited for an unrelated Z task's 5 s move to end.
+* A move in power-automatic mode stopped by a kill (KL, Control-D, the PCIx's KS) puts the
+  auxiliary output back to its idle state, as a move's end does: PA turns it on "upon the
+  execution of the GO or GD and off at the end of that move" (PC48 §6.6); the PCIx: "the
+  auxiliary line will invert at the beginning of every motion and return to normal at the end".
+  With SE the settling time comes first ("to be used before the power is reduced"); a settling
+  time under way when the kill comes runs on. The output stayed in its moving state for good.
 """
 
 from __future__ import annotations
@@ -83,3 +89,50 @@ def test_an_am_output_bit_waits_for_its_own_task_only(model: str, bit: str, low:
     assert h.position("Z") < 5000
     if model == "PC48-4":
         assert h.query("BX") == frame("000100" if low else "000000")
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+@pytest.mark.parametrize("kill", ["KL", "\x04"])
+def test_a_killed_power_automatic_move_powers_down(model: str, sep: str, kill: str) -> None:
+    """``AX PA MR100000 GO``: the output goes high with the move; killed at 0.2 s, the move has
+    ended and the output goes low at once, as at a move's own end. Before: high for good."""
+    h = Harness(model)
+    h.send(sep.join(["AX", "PA", "MR100000", "GO", ""]))
+    h.until(0.2)
+    assert h.axis("X").aux is True
+    h.send(kill + sep if kill == "KL" else kill)
+    h.until(0.21)
+    assert h.position("X") < 100000
+    assert h.axis("X").aux is False
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+def test_a_killed_move_settles_before_it_powers_down(model: str, sep: str) -> None:
+    """E27's ``AZ PA SE500;`` ("remain on for 500 milliseconds after the move is complete"),
+    with the move killed at 0.2 s: the output stays high until 0.7 s, then goes low."""
+    h = Harness(model)
+    h.send(sep.join(["AZ", "PA", "SE500", "MR100000", "GO", ""]))
+    h.until(0.2)
+    h.send("KL" + sep)
+    h.until(0.69)
+    assert h.axis("Z").aux is True
+    h.until(0.71)
+    assert h.axis("Z").aux is False
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+def test_a_kill_during_the_settling_time_lets_it_run_out(model: str, sep: str) -> None:
+    """``AZ PA SE500 MR1000 GO``: the move ends at 0.0635 s on the PC48 (tick 130; 0.045 s at
+    the VS4's and PCIx's power-up AC), the output goes low 0.5 s later. A KL at 0.2 s, the axis
+    at rest, ends no motion and leaves the settling time to run out. Before, the KL cancelled it
+    and the output stayed high."""
+    h = Harness(model)
+    h.send(sep.join(["AZ", "PA", "SE500", "MR1000", "GO", ""]))
+    h.until(0.2)
+    assert h.position("Z") == 1000 and h.axis("Z").aux is True
+    h.send("KL" + sep)
+    h.until(0.53)
+    assert h.axis("Z").aux is True
+    h.until(0.58)
+    assert h.axis("Z").aux is False
+

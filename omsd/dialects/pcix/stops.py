@@ -69,7 +69,6 @@ def _ks(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     axes = _selected(ix, cmd, nonzero=False)
     for axis in axes:
         axis.halt(t)
-        axis.aux_timer = None
     _stop(ix, axes, cell, t, kill=True)
 
 
