@@ -13,6 +13,9 @@ wrong (2026-11-27).
   auxiliary line will invert at the beginning of every motion and return to normal at the end".
   With SE the settling time comes first ("to be used before the power is reduced"); a settling
   time under way when the kill comes runs on. The output stayed in its moving state for good.
+* SE's 3 slots are charged on every GO and GD once a settling time is given, PA or not: "The use
+  of this command requires 3 queue slots with the execution of each GO or GD command" (PC48 and
+  VS4 §6.6 SE). They were charged only while PA was on.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import pytest
 
 from omsd.board.harness import Harness
 
-from .support import frame
+from .support import frame, number
 
 # X, Y, Z, T at 1000 steps/s and 10,000 steps/s²: a 1000-step move takes 1.1 s (0.1 s ramps)
 SETUP = ["AA", "VL1000,1000,1000,1000;", "AC10000,10000,10000,10000;"]
@@ -136,3 +139,18 @@ def test_a_kill_during_the_settling_time_lets_it_run_out(model: str, sep: str) -
     h.until(0.58)
     assert h.axis("Z").aux is False
 
+
+@pytest.mark.parametrize("model", ["PC48-4", "PC48-4E", "VS4-040"])
+def test_se_is_charged_on_every_go_without_pa(model: str) -> None:
+    """SE: "The use of this command requires 3 queue slots with the execution of each GO or GD
+    command" (no word of PA). ``AX SE500`` without PA, then a GO held behind a WT: its table's
+    cost (4; 7 with encoders) plus 3. Before, 4 (7): SE was charged only while PA was on."""
+    h = Harness(model)
+    h.send("AX SE500; WT1000 ")
+    go = 4 if model == "PC48-4" else 7
+    before = number(h.query("RQ"))
+    h.send("MR1000 GO ")
+    assert before - number(h.query("RQ")) == 2 + go + 3
+    before = number(h.query("RQ"))
+    h.send("SE0; MR1000 GO ")
+    assert before - number(h.query("RQ")) == 3 + 2 + go

@@ -116,12 +116,14 @@ def _rm(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 def _go_extra(ix: Interpreter, index: int) -> int:
     """PA adds 2 and SE 3 slots to each GO/GD (PC48 §6.6; the PCIx's GO and GD tables print them
     as add-ons, which ``Interpreter.cost`` charges from the mode in force, and its PA and SE
-    leave ``pa_entered`` and ``se_entered`` alone)."""
+    leave ``pa_entered`` and ``se_entered`` alone). SE's are charged whether PA is on or not:
+    "The use of this command requires 3 queue slots with the execution of each GO or GD
+    command", as the PCIx's "If an auxiliary output bit settle time has been specified add 3"."""
     extra = 0
     if ix.pa_entered[index]:
         extra += 2
-        if ix.se_entered[index]:
-            extra += 3
+    if ix.se_entered[index]:
+        extra += 3
     return extra
 
 
