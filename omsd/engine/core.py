@@ -232,6 +232,11 @@ class Core:
         if self.front.echo:
             self.reply_value(f"{kind.message}: {command}", t)
 
+    @property
+    def has_output(self) -> bool:
+        """Whether there is output to take (a link that finds none need not take it)."""
+        return bool(self._output)
+
     def take_output(self) -> list[Output]:
         out, self._output = self._output, []
         self._sources = []
