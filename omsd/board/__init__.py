@@ -4,7 +4,8 @@ sans-I/O model of an OMS motion control card).
 Time is an argument of every call; nothing here sleeps, reads a clock or imports asyncio.
 :class:`Board` is the card, :class:`Harness` drives one on a manual clock (tests, experiments);
 what a board says is :data:`Output` (replies and events); :class:`AxisWorld` describes the stage
-around an axis. ``docs/architecture.md`` draws the layers: engine, dialects, board.
+around an axis; :data:`OVRT` is the status register's limit bit (a link's interrupt service
+reads it). ``docs/architecture.md`` draws the layers: engine, dialects, board.
 """
 
 from omsd.board.board import Board
@@ -21,9 +22,11 @@ from omsd.engine.events import (
     SlipEvent,
     describe,
 )
+from omsd.engine.registers import OVRT
 from omsd.engine.world import AxisWorld, LimitWiring, SwitchType
 
 __all__ = [
+    "OVRT",
     "AxisWorld",
     "Board",
     "CommandErrorEvent",

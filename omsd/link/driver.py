@@ -37,6 +37,7 @@ from __future__ import annotations
 from collections import deque
 
 from omsd.board import (
+    OVRT,
     Board,
     CommandErrorEvent,
     DoneEvent,
@@ -95,6 +96,8 @@ class DriverLink:
         self._notes: list[str] = []
         # when the done register was last read for a DONE marker (the link's time then)
         self._done_read_at: float | None = None
+        # the sample of the last limit given its "@" (limits on one sample are one interrupt)
+        self._limit_marked_at: float | None = None
         # the time of a DONE / limit that no wait character of its session has claimed yet
         # (each one can release at most one wait)
         self._unclaimed: dict[tuple[int, int], float] = {}
@@ -387,12 +390,18 @@ class DriverLink:
                 continue
             self._events.append(item)
             # the interrupt service routine reads the status register (clearing it) first
-            board.read_status_register(now)
+            status = board.read_status_register(now)
             mine = self._waiting is not None and source in (self._wait_session, 0)
             self._end_echo(source)
             if isinstance(item, CommandErrorEvent):
                 merge(pieces, source, b"#" + eos)
             elif isinstance(item, LimitEvent):
+                if item.time == self._limit_marked_at and not status & OVRT:
+                    # limits reached on one sample set OVRT once: one interrupt, one "@"
+                    # (§7.3.3: "A limit interrupt causes an @ character"); the first one's
+                    # read of the status register cleared the bit, and it is not set again
+                    continue
+                self._limit_marked_at = item.time
                 merge(pieces, source, b"@" + eos)
                 if mine and self._waiting == WAIT_LIMIT and item.time >= self._wait_since:
                     self._release(now)

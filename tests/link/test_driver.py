@@ -133,6 +133,25 @@ def test_limit_and_slip_markers() -> None:
     assert h.take() == b"$\n"
 
 
+def test_limits_on_one_sample_are_one_interrupt_and_one_at_sign() -> None:
+    """§7.3.3: "A limit interrupt causes an @ character". Two axes reaching their switches on
+    the same sample set the status register's OVRT bit once: one interrupt, whose service reads
+    (and clears) the register, one ``@``; both limits are in the log. Limits on two samples are
+    two interrupts, two ``@``."""
+    world = {"X": AxisWorld(positive_limit=500), "Y": AxisWorld(positive_limit=500)}
+    h = driver("PC48-4E", world=world)
+    h.write(b"AA VL10000,10000 MR1000,1000 GO @ RP")
+    h.run(1.0)
+    said = h.take()
+    assert said.startswith(b"@\n") and said.count(b"@") == 1 and said.endswith(b",0,0\n")
+    assert sum(type(e).__name__ == "LimitEvent" for e in h.events) == 2
+    world = {"X": AxisWorld(positive_limit=500), "Y": AxisWorld(positive_limit=600)}
+    h = driver("PC48-4E", world=world)
+    h.write(b"AA VL10000,10000 MR1000,1000 GO")
+    h.run(1.0)
+    assert h.take() == b"@\n@\n"
+
+
 def test_markers_wait_for_the_end_of_a_reply() -> None:
     """ "If the board is returning a message when an interrupt occurs, the interrupt symbol will
     be delayed until after the end of the message string." A reply is never split."""
