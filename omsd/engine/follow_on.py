@@ -43,6 +43,7 @@ from omsd.engine.states import Motion, Wait
 from omsd.engine.trajectory import Course, Trajectory
 
 _MOVE = Motion.MOVE
+_IDLE = Motion.IDLE
 
 
 def follow_on(machine: Core, axis: Axis, codes: Collection[str], t: float) -> bool:
@@ -94,6 +95,9 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
             wait = axis.wait
             if wait is None:
                 if axis.queue.pc < len(axis.queue.program):
+                    return False
+            elif wait.kind == "motion":  # (Executor.satisfied's first case, written out)
+                if axis.motion is _IDLE:
                     return False
             elif ex.satisfied(axis, wait, t):
                 return False

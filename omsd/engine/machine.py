@@ -176,7 +176,13 @@ class Machine(Core):
         epoch = self.outside_epoch
         best: float | None = None
         for axis in axes:
-            t = axis.next_event_time()
+            event = axis.event  # (read without a call where it is known, as _next_internal)
+            if event is None:
+                t = axis.next_event_time()
+            else:
+                t = event[0]
+                if t == INF:
+                    t = None
             if t is None or (best is not None and t >= best):
                 continue
             # what each axis was found to be is known until it is changed from outside
