@@ -131,7 +131,9 @@ def _tl(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         raise CommandFailed(ErrorKind.OUT_OF_RANGE)
 
     def apply(a: Axis, when: float) -> None:
-        a.set_travel_limits(upper, lower, when)
+        # "absolute positions", as MA's: under an encoder ratio in encoder counts, compared with
+        # the position counter in motor steps
+        a.set_travel_limits(a.to_motor(upper), a.to_motor(lower), when)
 
     ix.enqueue([(axis, Op("SET", ("TL", apply), ix.cost(cell, axis)))])
 

@@ -157,7 +157,13 @@ def _dc(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     raw = ix.one(cmd)
     assert raw is not None
     value = ix.check("DC", ix.convert(axis, raw, "acc"))
-    apply_to(ix, cmd, cell, [axis], setter("dc", axis.to_motor(value)), t)
+
+    def apply(a: Axis, when: float) -> None:
+        # motor steps with the ratio in force when the queue reaches DC ("DC#; AX - AT 2"), as AC
+        a.dc = a.to_motor(value)
+        a.invalidate()
+
+    apply_to(ix, cmd, cell, [axis], apply, t)
 
 
 # the queries of one value: mnemonic -> reply text for the current axis

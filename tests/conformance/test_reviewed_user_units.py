@@ -1,0 +1,61 @@
+"""User units (UU) and the encoder ratio (ER) in the PCIx's position and acceleration commands,
+found by a review of user units against the manuals (PCIx 002_5f0bea9264c6d239.txt).
+
+omsd takes the positions, velocities and accelerations of an encoder axis under ER in encoder
+counts and makes motor steps of them when the command runs (docs/decisions.md, "With ER set,
+distances, velocities and accelerations on an encoder axis are in encoder counts"; PC48 §6.15:
+"All distance, velocity and acceleration parameters are input in encoder counts when this mode is
+enabled").
+
+* TL's limits are "absolute positions", as MA's targets: under ER they were left as typed, in
+  motor steps, so ``ER2,1;TL1000,-1000;MA1500;GO;`` ran to 1500 counts (750 steps) through the
+  limit at 1000.
+* DC made its steps with the ratio of the moment it was typed, not of when its queue reached it
+  ("DC; AX - AT 2"), unlike AC: ``ER2,1;AC600;DC600;`` typed behind a move left AC at 300, DC
+  at 600.
+"""
+
+from __future__ import annotations
+
+from omsd.board.events import LimitEvent
+from omsd.board.harness import Harness
+
+from .pcix import reply
+
+
+def test_travel_limits_are_positions_in_the_encoder_ratios_counts() -> None:
+    """TL: "one for the upper travel limit and the other for the lower travel limit, both as
+    absolute positions"; "If the axis reaches either of these logical limits, the PCIX will flag
+    a limit condition". Under ``ER2,1`` (2 encoder counts a step) MA1500 is 1500 counts, 750
+    steps, and the limit at 1000 counts is 500 steps: the move stops there (the first sample
+    beyond 500 steps at VL10000 counts/s, 5000 steps/s, is 501), flagging the limit."""
+    h = Harness("PCIX-040")  # steppers with encoders
+    h.send("AX;ER2,1;VL10000;TL1000,-1000;MA1500;GO;")
+    h.advance(2.0)
+    assert h.position("X") == 501  # (it was 750: the move ran through the limit)
+    assert [e.direction for e in h.events() if isinstance(e, LimitEvent)] == [1]
+    assert h.errors() == []
+
+
+def test_travel_limits_under_user_units_and_a_ratio() -> None:
+    """The same with user units, as EPICS sets up an encoder axis (``ER<e>,<m> UU<e/m>``):
+    ``ER1,2;UU0.5;`` makes the user unit a motor step again, so TL500 is at step 500."""
+    h = Harness("PCIX-040")
+    h.send("AX;ER1,2;UU0.5;VL5000;TL500,-500;MA750;GO;")
+    h.advance(2.0)
+    assert h.position("X") == 501
+    assert h.errors() == []
+
+
+def test_dc_takes_the_ratio_in_force_when_its_queue_reaches_it() -> None:
+    """DC "1 ≤ DC ≤ 8000000", queued ("DC; AX - AT 2"), as ER is ("ER#,#; AX - AT 1"). Typed
+    behind a move, ``ER2,1;AC600;DC600;`` reach the axis after the move, in the order typed
+    (AC first: the deceleration "will take on whatever value is entered via the AC command"):
+    DC is then 300 steps/s², as AC is (it was 600: the ratio of the moment DC was typed,
+    1:1)."""
+    h = Harness("PCIX-040")
+    h.send("AX;VL1000;MR1000;GO;ER2,1;AC600;DC600;")
+    h.advance(3.0)
+    assert h.send("?AC;") == reply("ac300")
+    assert h.send("?DC;") == reply("dc300")  # (it was dc600)
+    assert h.errors() == []
