@@ -10,12 +10,16 @@ enabled").
 * TL's limits are "absolute positions", as MA's targets: under ER they were left as typed, in
   motor steps, so ``ER2,1;TL1000,-1000;MA1500;GO;`` ran to 1500 counts (750 steps) through the
   limit at 1000.
+* RU ignored the ratio: ``ER2,1;UU10;LP5;RU;`` answered ``uu2.50000``, the steps over UU, not
+  the position LP loaded (the PC48 family's RU reads it back).
 * DC made its steps with the ratio of the moment it was typed, not of when its queue reached it
   ("DC; AX - AT 2"), unlike AC: ``ER2,1;AC600;DC600;`` typed behind a move left AC at 300, DC
   at 600.
 """
 
 from __future__ import annotations
+
+import pytest
 
 from omsd.board.events import LimitEvent
 from omsd.board.harness import Harness
@@ -58,4 +62,23 @@ def test_dc_takes_the_ratio_in_force_when_its_queue_reaches_it() -> None:
     h.advance(3.0)
     assert h.send("?AC;") == reply("ac300")
     assert h.send("?DC;") == reply("dc300")  # (it was dc600)
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize("mode", ["AX;", "AA;"])
+def test_ru_reads_back_the_position_typed_under_an_encoder_ratio(mode: str) -> None:
+    """RU "returns the current position in user units"; its example: ``UU2000; LP0; MR3.5; GO;``
+    then RU, "uu3.50000". Under ``ER2,1`` LP and MR take encoder counts (as on the PC48 family,
+    whose RU already reads them back): ``ER2,1;UU10;LP5;`` loads 50 counts, 25 steps, and RU
+    reads ``uu5.00000`` (it read uu2.50000, the steps over UU). In AA ("RU AA-AM Immediate")
+    each axis's value."""
+    h = Harness("PCIX-040")
+    h.send("AX;ER2,1;UU10;LP5;AY;UU2000;LP0;MR3.5;GO;")
+    h.advance(1.0)
+    assert h.send("AX;RP;RE;") == reply("25") + reply("50")
+    if mode == "AX;":
+        assert h.send("AX;RU;") == reply("uu5.00000")
+        assert h.send("AY;RU;") == reply("uu3.50000")
+    else:
+        assert h.send("AA;RU;") == reply("uu5.00000,uu3.50000,uu0.00000,uu0.00000")
     assert h.errors() == []

@@ -109,19 +109,22 @@ def _rv(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     _list(ix, lambda a: str(whole(a.velocity(t))), t)
 
 
-@handles("RU")
-def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    # "a floating point number with five characters to the right of the decimal point"; "the
-    # current position in user units", which with an encoder ratio are encoder counts (§6.15
-    # ER: "allowing units such as inches or revolutions to be specified in encoder counts"):
-    # ER2,1 UU10 LP5 is 50 encoder counts, 25 motor steps, and RU 5.00000
-    axis = ix.axis
+def user_position(axis: Axis, t: float) -> Decimal:
+    """RU's number: "the current position in user units", which with an encoder ratio are
+    encoder counts (§6.15 ER: "allowing units such as inches or revolutions to be specified in
+    encoder counts"): ER2,1 UU10 LP5 is 50 encoder counts, 25 motor steps, and RU 5."""
     value = Decimal(axis.counter(t))
     if axis.has_encoder and axis.ratio != 1.0:
         value = value * Decimal(axis.ratio)
     if axis.uu is not None:
         value = value / axis.uu
-    ix.machine.reply_value(f"{value:.5f}", t)
+    return value
+
+
+@handles("RU")
+def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
+    # "a floating point number with five characters to the right of the decimal point"
+    ix.machine.reply_value(f"{user_position(ix.axis, t):.5f}", t)
 
 
 @handles("RA", "QA")
