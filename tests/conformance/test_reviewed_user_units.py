@@ -82,3 +82,49 @@ def test_ru_reads_back_the_position_typed_under_an_encoder_ratio(mode: str) -> N
     else:
         assert h.send("AA;RU;") == reply("uu5.00000,uu3.50000,uu0.00000,uu0.00000")
     assert h.errors() == []
+
+
+@pytest.mark.parametrize(
+    ("uu", "text"),
+    [
+        ("0.0000025", "uu0.000003"),
+        ("0.0000015", "uu0.000002"),
+        ("2.1234565", "uu2.123457"),
+        ("512", "uu512.000000"),
+    ],
+)
+def test_uu_query_rounds_a_half_up(uu: str, text: str) -> None:
+    """?UU: "The command will return the UU value with six digits to the right of the decimal
+    point. If the UU value exceeds six digits for the fractional value, the value will be rounded
+    off to the sixth decimal place" (example ``uu512.000000``). A half rounds up, as "rounded
+    off" reads (``UU0.0000025`` answered ``uu0.000002``: round-half-even)."""
+    h = Harness("PCIX-040")
+    h.send(f"AX;UU{uu};")
+    assert h.send("?UU;") == reply(text)
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize(
+    ("model", "framing"), [("PC48-4E", "\n\r{}\n\r"), ("PCIX-040", "uu{}\n\r")]
+)
+def test_ru_rounds_a_half_up(model: str, framing: str) -> None:
+    """RU: "a floating point number with five characters to the right of the decimal point"
+    (PC48 §6.13), rounded as ?UU's six ("rounded off"): 1 step under UU200000 is 0.000005 user
+    units, ``0.00001`` (it was ``0.00000``: round-half-even), -1 step ``-0.00001``."""
+    h = Harness(model)
+    sep = ";" if model.startswith("PCIX") else " "
+    h.send(sep.join(["AX", "UU200000", "LP0.000005", ""]))
+    assert h.send("RU" + sep) == framing.format("0.00001").encode()
+    h.send(sep.join(["LP-0.000005", ""]))
+    assert h.send("RU" + sep) == framing.format("-0.00001").encode()
+    assert h.errors() == []
+
+
+def test_ru_of_a_tiny_user_unit_is_written_out() -> None:
+    """The widest RU: 33,000,000 steps over ``UU0.00000000000000000001`` (24 characters, the
+    longest number taken) is 3.3 × 10^27 user units, written out whole with its five decimals
+    (rounding it must not run out of decimal precision)."""
+    h = Harness("PC48-4E")
+    h.send("AX LP33000000 UU0.00000000000000000001 ")
+    assert h.send("RU") == b"\n\r3300000000000000000000000000.00000\n\r"
+    assert h.errors() == []

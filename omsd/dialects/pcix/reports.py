@@ -13,7 +13,7 @@ from omsd.dialects.pcix.common import (
 )
 from omsd.dialects.shared.io import aux
 from omsd.dialects.shared.loops import while_sync
-from omsd.dialects.shared.reports import user_position, whole
+from omsd.dialects.shared.reports import rounded_off, user_position, whole
 from omsd.dialects.shared.sync import task_axes
 from omsd.engine.axis import Axis, Motion
 from omsd.engine.queue import Op, SyncGroup
@@ -58,7 +58,7 @@ def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     """ "uu3.50000": the position in user units, five decimals; under an encoder ratio in its
     encoder counts, as LP and MA take them (``ER2,1;UU10;LP5;RU;`` answers ``uu5.00000``)."""
     axes = [ix.axis] if ix.mode == "single" else ix.machine.axes
-    reply(ix, ",".join(f"uu{user_position(axis, t):.5f}" for axis in axes), t)
+    reply(ix, ",".join("uu" + rounded_off(user_position(axis, t), 5) for axis in axes), t)
 
 
 @handles("RE")

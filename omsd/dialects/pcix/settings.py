@@ -18,6 +18,7 @@ from omsd.dialects.pcix.common import (
     setter,
 )
 from omsd.dialects.pcix.interpreter import PcixInterpreter
+from omsd.dialects.shared.reports import rounded_off
 from omsd.engine.axis import Axis
 from omsd.engine.queue import Op
 from omsd.models.spec import Cell
@@ -221,4 +222,5 @@ def _q_er(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 @handles("?UU")
 def _q_uu(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     uu = ix.axis.uu
-    reply(ix, "uf" if uu is None else f"uu{uu:.6f}", t)
+    # "six digits to the right of the decimal point ... rounded off to the sixth decimal place"
+    reply(ix, "uf" if uu is None else "uu" + rounded_off(uu, 6), t)

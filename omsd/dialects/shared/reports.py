@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from decimal import Decimal
+from decimal import ROUND_HALF_UP, Context, Decimal
 
 from omsd.dialects.interpreter import Interpreter
 from omsd.dialects.shared.table import handles
@@ -121,10 +121,18 @@ def user_position(axis: Axis, t: float) -> Decimal:
     return value
 
 
+def rounded_off(value: Decimal, places: int) -> str:
+    """``value`` with ``places`` decimals, a half rounded away from zero: ?UU's "the value will be
+    rounded off to the sixth decimal place" (PCIx), and RU's five decimals the same way."""
+    # (a precision for the widest: a counter of 10^8 steps over a UU of 10^-22, 24 characters)
+    exact = Context(prec=100)
+    return f"{value.quantize(Decimal(1).scaleb(-places), ROUND_HALF_UP, exact):f}"
+
+
 @handles("RU")
 def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     # "a floating point number with five characters to the right of the decimal point"
-    ix.machine.reply_value(f"{user_position(ix.axis, t):.5f}", t)
+    ix.machine.reply_value(rounded_off(user_position(ix.axis, t), 5), t)
 
 
 @handles("RA", "QA")
