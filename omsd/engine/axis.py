@@ -129,19 +129,24 @@ class Axis(AxisState):
             self.halt(t)
             return
         self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
-        base = 0.0
-        if self.motion is _MOVE and self.traj.pieces:
-            last = self.traj.pieces[-1]
-            base = abs(last.v(last.duration))
-            if base < BASE_FLOOR:
-                base = 0.0  # (a ramp to rest, less what floating point leaves)
-            elif abs(v) <= base:
-                self.halt(t)  # (at or below the base velocity: it drops to rest at once)
-                return
+        base = self.stop_base()
+        if base and abs(v) <= base:
+            self.halt(t)  # (at or below the base velocity: it drops to rest at once)
+            return
         # a stop of the soft-limit mode's own ramp down (ST typed while it runs) is that same
         # ramp at AC: it runs on past the switch it reacts to (limit_ramp), heard once
         ramp = pf.velocity_change(v, math.copysign(base, v), self.ac)
         self.begin(t, ramp, motion, limit_ramp=True)
+
+    def stop_base(self) -> float:
+        """The base velocity a stop of the current motion ramps down to and stops from (ST, SA,
+        SD, a soft limit, FP): the move's own, where its profile's ramp down ends (VB on a linear
+        ramp, scaled for ML/MT), 0 for every other motion (:meth:`decelerate`)."""
+        if self.motion is not _MOVE or not self.traj.pieces:
+            return 0.0
+        last = self.traj.pieces[-1]
+        base = abs(last.v(last.duration))
+        return base if base >= BASE_FLOOR else 0.0  # (a ramp to rest, less floating point's)
 
     # -- what happens next --------------------------------------------------------------------
 

@@ -115,7 +115,13 @@ def _stop_at(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if v0 == 0.0:
         return None
     x = axis.position(tick)
-    pieces = pf.stop_at(dest - x, v0, axis.ac)
+    # a move with a base velocity ramps down to it and stops from there, as ST does
+    pieces = pf.stop_at(dest - x, v0, axis.ac, axis.stop_base())
+    if not pieces:  # (at or below the base velocity, the position passed: rest at once)
+        stopped = axis.motion
+        axis.halt(tick)
+        ex.stopped_at_once(axis, tick, stopped)
+        return None
     reach = sum(p.x(p.duration) for p in pieces)
     final = dest if abs(x + reach - dest) < 1e-6 else None
     axis.begin(tick, pieces, Motion.STOP, final=final)

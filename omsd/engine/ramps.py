@@ -446,17 +446,22 @@ def stop_distance(v: float, accel: float) -> float:
     return v * v / (2.0 * accel) if accel > 0.0 else 0.0
 
 
-def stop_at(distance: float, v0: float, accel: float) -> list[Piece]:
+def stop_at(distance: float, v0: float, accel: float, base: float = 0.0) -> list[Piece]:
     """Pieces that bring velocity ``v0`` to rest ``distance`` ahead (SP, FP), or as soon as
-    possible at ``accel`` when that is too close or behind ("the axis will overshoot")."""
-    brake = stop_distance(v0, accel)
+    possible at ``accel`` when that is too close or behind ("the axis will overshoot").
+
+    A move with a base velocity ``base`` ramps down to it and drops to rest from there, as its
+    own end does (VB: "The deceleration is the same in reverse"); at or below it there is no
+    ramp: the axis runs on to the position and stops there at once (or at once, if passed)."""
     if v0 == 0.0:
         return []
+    end = min(base, abs(v0))
+    brake = stop_distance(v0, accel) - stop_distance(end, accel)
     ahead = distance * math.copysign(1.0, v0)
     pieces: list[Piece] = []
     if ahead > brake:
         pieces.append(cruise(v0, (ahead - brake) / abs(v0)))
-    return pieces + velocity_change(v0, 0.0, accel)
+    return pieces + velocity_change(v0, math.copysign(end, v0), accel)
 
 
 def hold_correction(error: float, gain: float, vmax: float, deadband: float) -> list[Piece]:
