@@ -53,6 +53,7 @@ from typing import Any, NoReturn
 from omsd.control.client import Control, default_socket
 from omsd.control.protocol import ControlError
 from omsd.helptext import HelpFormatter, examples
+from omsd.hostport import host_port
 
 EXIT_REFUSED = 1
 EXIT_USAGE = 2
@@ -418,8 +419,8 @@ def _connect(args: argparse.Namespace) -> Control:
             return Control(tcp=args.tcp)
         except OSError as exc:
             raise _Unreachable(
-                f"cannot reach the daemon at {host}:{port}: {_reason(exc)}; --tcp takes the"
-                " address of the daemon's [control] tcp"
+                f"cannot reach the daemon at {host_port(host, port)}: {_reason(exc)}; --tcp takes"
+                " the address of the daemon's [control] tcp"
             ) from None
     if args.socket is not None:
         try:

@@ -29,6 +29,7 @@ from omsd import sdnotify
 from omsd.config import DaemonConfig, runtime_directory
 from omsd.control.server import ControlServer, SocketInUse
 from omsd.files import Refused, missing_directory, preflight, state_file_problem
+from omsd.hostport import host_port
 from omsd.service import BoardService
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import Endpoint
@@ -191,7 +192,7 @@ class Daemon:
                         ) from None
                     self.servers.append(server)
                     self._announce(
-                        Endpoint(board.name, board.model, board.link, "tcp", f"{host}:{port}")
+                        Endpoint(board.name, board.model, board.link, "tcp", host_port(host, port))
                     )
                 for pty in board.pty:
                     endpoint = PtyEndpoint(service, pty.link, pty.group, pty.mode, pty.terminal)
@@ -275,7 +276,9 @@ class Daemon:
                 ) from None
             self.servers.append(server)
             self._announce(
-                Endpoint(board.name, board.model, board.link, "rfc2217", f"{host}:{port_number}")
+                Endpoint(
+                    board.name, board.model, board.link, "rfc2217", host_port(host, port_number)
+                )
             )
 
     def _say_what_is_not_served(self) -> None:
@@ -367,7 +370,7 @@ class Daemon:
                 raise StartupError(
                     f"cannot listen on control tcp {config.tcp}: {reason.lower()}"
                 ) from None
-            self.log.info(f"control tcp {host}:{port}")
+            self.log.info(f"control tcp {host_port(host, port)}")
 
     def _start_mqtt(self) -> None:
         """The MQTT bridge (omsd.mqtt), if ``[mqtt]`` is configured, once the boards are up. It
@@ -408,10 +411,9 @@ class Daemon:
                 f"cannot serve the web dashboard on {config.listen}: {reason.lower()}"
             ) from None
         self.web = web
-        shown = f"[{host}]" if ":" in host else host
         what = "control" if config.control else "read-only"
         token = "?token=..." if config.token is not None else ""
-        self.log.info(f"web dashboard http://{shown}:{port}/{token} ({what})")
+        self.log.info(f"web dashboard http://{host_port(host, port)}/{token} ({what})")
 
     def _load_state(self) -> StateFile | None:
         """The boards' flash: "a corrupt or missing state file gives the factory defaults and

@@ -98,6 +98,7 @@ from omsd.config import MqttConfig
 from omsd.control.protocol import ControlError
 from omsd.control.server import ControlServer
 from omsd.control.watch import event_record as event_payload  # one event format for both
+from omsd.hostport import host_port
 from omsd.service import BoardService
 from omsd.telemetry.traffic import Traffic, TrafficLog
 
@@ -360,8 +361,7 @@ class MqttBridge:
         self.services = services
         self.control = control
         self.log = log
-        host = f"[{config.host}]" if ":" in config.host else config.host
-        self.where = f"{host}:{config.port}"
+        self.where = host_port(config.host, config.port)
         self.status_topic = f"{config.prefix}/status"
         self.reply_topic = f"{config.prefix}/status/reply"  # for boards it does not serve
         self.outbox = Outbox(QUEUE_LIMIT if queue_limit is None else queue_limit, self._dropped)

@@ -70,6 +70,8 @@ from typing import IO, TYPE_CHECKING, Any, NoReturn
 
 import pytest
 
+from omsd.hostport import host_port
+
 if TYPE_CHECKING:
     from omsd.control.client import Control
 
@@ -472,7 +474,7 @@ class Omsd:
             port = serial.Serial(str(target.pty), timeout=timeout)
         else:
             host, number = target._tcp()
-            port = serial.serial_for_url(f"socket://{host}:{number}", timeout=timeout)
+            port = serial.serial_for_url(f"socket://{host_port(host, number)}", timeout=timeout)
         self._closers.append(port.close)
         return port
 

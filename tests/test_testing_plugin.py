@@ -392,3 +392,31 @@ def test_a_daemon_not_ready_in_time_is_killed(tmp_path: Path) -> None:
     finally:
         problems = factory.close()
     assert problems == []
+
+
+def _ipv6_loopback() -> bool:
+    import socket
+
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+    except OSError:
+        return False
+    return True
+
+
+@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback here")
+def test_serial_reaches_a_board_served_on_ipv6(tmp_path: Path) -> None:
+    """``serial()`` on a board served on [::1] opened ``socket://::1:PORT``, a URL with no
+    host pyserial can read; it is ``socket://[::1]:PORT`` (RFC 3986 §3.2.2)."""
+    pytest.importorskip("serial")
+    factory = OmsdBoards(tmp_path)
+    try:
+        daemon = factory(xy={"model": "PC48-2", "tcp": "[::1]:0"})
+        assert daemon.board("xy").tcp is not None and daemon.board("xy").tcp[0] == "::1"
+        port = daemon.serial("xy")
+        port.write(b"WY")
+        assert port.read_until(b"\n") == b"PC48 ver 3.00-2\n"
+    finally:
+        problems = factory.close()
+    assert problems == []

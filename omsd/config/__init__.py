@@ -111,6 +111,7 @@ from omsd.defaults import (
     default_pty_link,
     runtime_directory,
 )
+from omsd.hostport import host_port
 
 if TYPE_CHECKING:
     from omsd.board import AxisWorld
@@ -128,8 +129,7 @@ class TcpEndpoint:
     terminal: bool = False  # for a person at a terminal program (omsd.transport.terminal)
 
     def __str__(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"{host}:{self.port}"
+        return host_port(self.host, self.port)
 
 
 @dataclass(frozen=True)
@@ -177,8 +177,7 @@ class Rfc2217Endpoint:
     pacing: bool = False
 
     def __str__(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"{host}:{self.port}"
+        return host_port(self.host, self.port)
 
 
 def _no_world() -> Mapping[str, AxisWorld]:

@@ -40,6 +40,7 @@ from omsd.control.protocol import (
     merge,
 )
 from omsd.defaults import default_pty_link
+from omsd.hostport import host_port
 
 _UNSET: Any = object()
 
@@ -59,7 +60,7 @@ class Control:
     ) -> None:
         if tcp is not None:
             self.sock = socket.create_connection(tcp, timeout=timeout)
-            self.address = f"{tcp[0]}:{tcp[1]}"
+            self.address = host_port(*tcp)
         else:
             target = Path(path) if path is not None else default_socket()
             self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)

@@ -53,6 +53,7 @@ from typing import TextIO
 
 from omsd.config import BoardConfig, TcpEndpoint
 from omsd.files import missing_directory, pty_link_refusal
+from omsd.hostport import host_port
 from omsd.recording.format import NO_CLIENT, Line, RecordingWriter
 from omsd.recording.ports import Port
 from omsd.telemetry.traffic import Direction
@@ -88,8 +89,7 @@ class Card:
     def __str__(self) -> str:
         if self.kind == "serial":
             return f"serial:{self.path},{self.baud},{self.bytesize}{self.parity}{self.stopbits}"
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"tcp:{host}:{self.port}"
+        return f"tcp:{host_port(self.host, self.port)}"
 
     @property
     def line(self) -> Line | None:
@@ -265,7 +265,7 @@ class Recorder:
             listener.setblocking(False)
             self._listener = listener
             host, port = listener.getsockname()[:2]
-            self.address = f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+            self.address = host_port(host, port)
             loop.add_reader(listener.fileno(), self._accept)
             return f"tcp:{self.address}"
         assert self.pty is not None
@@ -309,7 +309,7 @@ class Recorder:
         except OSError as exc:
             self._note("warning", f"accept failed: {exc.strerror or exc}")
             return
-        peer_text = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
+        peer_text = host_port(peer[0], peer[1]) if isinstance(peer, tuple) else str(peer)
         label = f"tcp:{self.address} #{next(self._serial)} ({peer_text})"
         if self.client is not None and self.client.eof:
             self._say(f"{label} takes over from {self.label}, which had stopped sending")

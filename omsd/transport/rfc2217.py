@@ -25,6 +25,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any
 
+from omsd.hostport import host_port
 from omsd.pacing import Line, Pacer
 from omsd.service import BoardService
 from omsd.transport import bound_address
@@ -323,12 +324,12 @@ async def serve_rfc2217(
     """Listen for RFC 2217 clients of the board; returns the server and the address bound (port
     0 asks the system for a free port)."""
     loop = asyncio.get_running_loop()
-    label = [f"rfc2217:{host}:{port}"]
+    label = [f"rfc2217:{host_port(host, port)}"]
     server = await loop.create_server(
         lambda: Rfc2217Client(service, label[0], policy, pacing), host, port, reuse_address=True
     )
     bound = bound_address(server, host)
-    label[0] = f"rfc2217:{bound[0]}:{bound[1]}"
+    label[0] = f"rfc2217:{host_port(*bound)}"
     return server, *bound
 
 

@@ -24,6 +24,7 @@ import itertools
 import os
 from typing import cast
 
+from omsd.hostport import host_port
 from omsd.service import BoardService
 from omsd.transport import bound_address
 from omsd.transport.terminal import Terminal, terminal_for
@@ -68,7 +69,7 @@ class TcpClient(asyncio.BufferedProtocol):
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         self.transport = cast(asyncio.Transport, transport)
         peer = self.transport.get_extra_info("peername")
-        peer_text = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) else str(peer)
+        peer_text = host_port(peer[0], peer[1]) if isinstance(peer, tuple) else str(peer)
         self.label = f"{self.endpoint} #{next(_serial)} ({peer_text})"
         service = self.service
         if not service.faults.cable:  # control API: the cable is cut, nobody gets through
@@ -244,10 +245,10 @@ async def serve_tcp(
     """Listen for the board; returns the server and the address actually bound (port 0 asks
     the system for a free port). ``terminal``: each client gets the terminal option."""
     loop = asyncio.get_running_loop()
-    label = [f"tcp:{host}:{port}"]
+    label = [f"tcp:{host_port(host, port)}"]
     server = await loop.create_server(
         lambda: TcpClient(service, label[0], policy, terminal), host, port, reuse_address=True
     )
     bound = bound_address(server, host)
-    label[0] = f"tcp:{bound[0]}:{bound[1]}"
+    label[0] = f"tcp:{host_port(*bound)}"
     return server, *bound

@@ -16,9 +16,10 @@ import socket
 import time
 from pathlib import Path
 
+import pytest
 import serial
 
-from .process import POLL, TIMEOUT, Conn, Omsd, wait_for
+from .process import POLL, TIMEOUT, Conn, Omsd, run_omsd, wait_for
 
 WY_PC48_4 = b"PC48 ver 3.00-4"
 
@@ -273,3 +274,42 @@ def test_more_than_the_driver_buffer_at_once_is_passed_on_exactly_once(omsd: Oms
         c.send(b"AX VL10000 MR500 GO ID ! " + b"AX RP " * 60)
         c.expect(b"!\x01\n" + b"500\n" * 60)
         assert c.quiet(0.1) == b""
+
+
+def _ipv6_loopback() -> bool:
+    try:
+        with socket.socket(socket.AF_INET6) as s:
+            s.bind(("::1", 0))
+    except OSError:
+        return False
+    return True
+
+
+@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback here")
+def test_ipv6_addresses_are_printed_in_brackets_everywhere(omsd: Omsd, tmp_path: Path) -> None:
+    """An IPv6 address with its port is written [::1]:PORT (RFC 3986 §3.2.2), as omsd's own
+    --tcp, [control] tcp and omsd ctl --tcp take it: the endpoint lines printed ::1:PORT,
+    which those refuse ("expected [HOST:]PORT") and a user pasting it into a client could not
+    use. The endpoint lines, the log's serving, control tcp and connection lines, the control
+    API's listing and omsd ctl boards all say [::1]:PORT."""
+    config = (
+        '[control]\nsocket = "off"\ntcp = "[::1]:0"\n\n'
+        '[[board]]\nname = "b6"\ntcp = "[::1]:0"\nrfc2217 = "[::1]:0"\n'
+    )
+    daemon = omsd(config=config, expect=2)
+    tcp, rfc = daemon.endpoints
+    assert tcp.kind == "tcp" and tcp.address == f"[::1]:{tcp.port}", tcp
+    assert rfc.kind == "rfc2217" and rfc.address == f"[::1]:{rfc.port}", rfc
+    assert wait_for(lambda: "control tcp" in daemon.stderr)
+    (control_line,) = [line for line in daemon.stderr.splitlines() if "control tcp" in line]
+    control = control_line.rsplit(" ", 1)[1]
+    assert control.startswith("[::1]:"), control_line  # and omsd ctl --tcp takes it as printed
+    with daemon.connect() as c:
+        assert c.ask(b"WY") == WY_PC48_4
+        here = c.sock.getsockname()[1]
+    assert wait_for(lambda: " connected" in daemon.stderr)
+    assert f"b6: tcp:[::1]:{tcp.port} #1 ([::1]:{here}) connected" in daemon.stderr
+    assert f"serving b6 PC48-4E driver tcp [::1]:{tcp.port}" in daemon.stderr
+    listed = run_omsd("ctl", "--tcp", control, "boards")
+    assert listed.returncode == 0, listed.stderr
+    assert f"tcp [::1]:{tcp.port}, rfc2217 [::1]:{rfc.port}" in listed.stdout
