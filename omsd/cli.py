@@ -22,7 +22,10 @@ place the daemon refuses to use (a runtime directory another user could change, 
 link's path that is not omsd's: :mod:`omsd.files`), or one it cannot use (a port in use, a log
 or state file that cannot be opened, a pty link whose directory is missing). A restart cannot
 fix any of them, and systemd's ``RestartPreventExitStatus=2`` stops there. 130 after Ctrl-C
-during start-up.
+during start-up. SIGTERM is a clean stop at any moment: 0, like a serving daemon's, also before
+the daemon's own handler is installed (the first ~0.2 s: imports, the configuration read), where
+it is handled by :func:`main`'s (nothing has been made then, and nothing is printed). Started by
+a parent that blocks SIGINT or SIGTERM (the mask is inherited across exec), omsd unblocks them.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from __future__ import annotations
 import argparse
 import gc
 import os
+import signal
 import sys
 
 from omsd import __version__
@@ -401,19 +405,47 @@ def _seconds(text: str) -> float:
     return value
 
 
+class _Terminated(BaseException):
+    """SIGTERM before the daemon's event loop handles it (see :func:`main`)."""
+
+
+def _terminated(signum: int, frame: object) -> None:
+    raise _Terminated
+
+
+def _sigterm_default() -> None:
+    """A command that does not serve dies by SIGTERM, as a command does."""
+    if signal.getsignal(signal.SIGTERM) is _terminated:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """The ``omsd`` command (``argv`` None: the process's own command line, and the process is
+    omsd's: then SIGTERM is handled from here on, and SIGINT and SIGTERM unblocked)."""
     try:
+        if argv is None:
+            # first thing: a SIGTERM before the daemon's loop handles it (imports, the file
+            # read) is a clean stop, status 0 as when serving, not death by its default action;
+            # a mask inherited from the parent that blocks them is lifted once the handler is
+            # there (a signal pending since exec is taken here)
+            signal.signal(signal.SIGTERM, _terminated)
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, (signal.SIGINT, signal.SIGTERM))
         return _main(sys.argv[1:] if argv is None else argv)
     except KeyboardInterrupt:  # Ctrl-C before the daemon's own handler (imports, the file)
         return 130
+    except _Terminated:  # SIGTERM before the daemon's own handler: nothing made yet
+        return 0
 
 
 def _main(argv: list[str]) -> int:
     if argv[:1] == ["ctl"]:
+        _sigterm_default()
         from omsd.ctl import main as ctl_main
 
         return ctl_main(argv[1:])
     args = _serving_args(argv) or _parser().parse_args(argv)
+    if args.command is not None:
+        _sigterm_default()
     if args.command == "ctl":
         print("omsd: ctl must come first: omsd ctl [OPTIONS] COMMAND", file=sys.stderr)
         return 2

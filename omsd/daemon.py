@@ -462,10 +462,14 @@ class Daemon:
         """Serve until SIGTERM/SIGINT (or :meth:`request_stop`)."""
         loop = asyncio.get_running_loop()
         # handlers first: a signal that comes as soon as the endpoints are announced must still
-        # stop the daemon cleanly
+        # stop the daemon cleanly. They are unblocked: a parent that blocks them (a supervisor,
+        # a thread) passes its mask on across exec, and the daemon would never see them
+        signals = (signal.SIGTERM, signal.SIGINT, signal.SIGHUP)
+        previous = {sig: signal.getsignal(sig) for sig in signals}
         for sig in (signal.SIGTERM, signal.SIGINT):
             loop.add_signal_handler(sig, self.request_stop)
         loop.add_signal_handler(signal.SIGHUP, self.reopen_logs)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, signals)
         try:
             await self.start()  # on failure it has already cleaned up, quietly
             sdnotify.ready(f"serving {len(self.endpoints)} endpoint(s)")
@@ -478,8 +482,13 @@ class Daemon:
                 sdnotify.stopping()
                 await self.stop()
         finally:
-            for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
+            # the handlers from before the loop's again (omsd.cli's for SIGTERM), not the
+            # defaults remove_signal_handler leaves: a SIGTERM while the process ends is a
+            # clean stop too
+            for sig in signals:
                 loop.remove_signal_handler(sig)
+                if previous[sig] is not None:
+                    signal.signal(sig, previous[sig])
 
     def reopen_logs(self) -> None:
         """SIGHUP: open the log file again (after logrotate renamed it, a new one), and say so.

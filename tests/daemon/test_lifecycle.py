@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 import serial
 
-from .process import POLL, TIMEOUT, Omsd, daemon_env
+from .process import POLL, TIMEOUT, Omsd, daemon_env, wait_for
 
 STOP_SIGNALS = [signal.SIGTERM, signal.SIGINT]
 
@@ -128,6 +128,73 @@ def test_ctrl_c_while_the_configuration_is_read_end_to_end_is_status_130(tmp_pat
     """The help: "130 interrupted". omsd is interrupted waiting for its configuration file
     (a FIFO nobody writes): status 130, nothing printed, no traceback."""
     assert _signal_while_reading_a_fifo(tmp_path, signal.SIGINT) == (130, b"", b"")
+
+
+def test_sigterm_while_the_configuration_is_read_is_a_clean_stop(tmp_path: Path) -> None:
+    """SIGTERM stops a serving omsd with status 0 (the help: "0 stopped"); before the event
+    loop's handler, while the configuration was read, it killed omsd by the default action
+    (status -15). Now the same status as when serving, and nothing printed: nothing had been
+    made, nothing is said to be stopped."""
+    assert _signal_while_reading_a_fifo(tmp_path, signal.SIGTERM) == (0, b"", b"")
+
+
+def test_sigterm_the_moment_omsd_exists_is_a_clean_stop(tmp_path: Path) -> None:
+    """SIGTERM sent as soon as the process exists. To be sure it comes before omsd has run a
+    line of its own (and not, by luck, later), it is sent while the test's thread blocks it:
+    omsd is started with it blocked and pending, as a supervisor that blocks signals would
+    start it, and it is delivered the moment omsd unblocks it. omsd installs its handler, then
+    unblocks SIGINT and SIGTERM, first thing: status 0, nothing printed. Before, the signal
+    stayed blocked for ever and the daemon served on (this test timed out)."""
+    env = {**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)}
+    command = [sys.executable, "-m", "omsd", "--tcp", "127.0.0.1:0", "--control", "off"]
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    try:
+        process = subprocess.Popen(
+            command,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env=env,
+        )
+        process.send_signal(signal.SIGTERM)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+    try:
+        out, err = process.communicate(timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        out, err = process.communicate()
+        pytest.fail(f"SIGTERM never acted on; stdout {out!r}, stderr {err[-2000:]!r}")
+    finally:
+        process.kill()
+        process.wait()
+    assert (process.returncode, out, err) == (0, b"", b"")
+
+
+def _sig_blocked(pid: int) -> set[signal.Signals]:
+    status = Path(f"/proc/{pid}/status").read_text()
+    (mask,) = [
+        int(line.split()[1], 16) for line in status.splitlines() if line.startswith("SigBlk")
+    ]
+    return {s for s in signal.Signals if mask >> (s - 1) & 1}
+
+
+def test_signals_blocked_by_the_parent_are_unblocked(omsd: Omsd, tmp_path: Path) -> None:
+    """A child inherits its parent's blocked-signal mask across fork and exec. Started by a
+    supervisor (or a thread) that blocks SIGTERM, SIGINT and SIGHUP, omsd never saw them: it
+    served on after SIGTERM and never reopened its log. systemd and shells give a clean mask;
+    omsd now unblocks the signals it acts on, whoever started it."""
+    log = tmp_path / "traffic.jsonl"
+    ours = {signal.SIGTERM, signal.SIGINT, signal.SIGHUP}
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, ours)
+    try:
+        daemon = omsd("--tcp", "127.0.0.1:0", "--log", str(log), "--control", "off")
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+    assert _sig_blocked(daemon.proc.pid) & ours == set()
+    daemon.proc.send_signal(signal.SIGHUP)
+    assert wait_for(lambda: "reopened log files on SIGHUP" in daemon.stderr), daemon.stderr
+    assert daemon.stop(signal.SIGTERM) == 0, daemon.stderr[-2000:]
 
 
 @pytest.mark.parametrize("sig", STOP_SIGNALS, ids=lambda s: s.name)
