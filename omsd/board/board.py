@@ -92,9 +92,12 @@ class Board(Machine):
     # -- power ----------------------------------------------------------------------------------
 
     def power_cycle(self, now: float) -> None:
-        """Switch the card off and on: a reset that also empties the input buffer."""
+        """Switch the card off and on: a reset that also empties the input buffer and loses what
+        the host wrote to the bus interface's latches (a VS4's interrupt vector, which RS keeps:
+        docs/decisions.md, "Flags and registers")."""
         self.advance(now)
         self.interpreter.discard_input()
+        self.registers.vector = 0
         self.reset(now)
 
     def load_flash(self) -> list[str]:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from omsd.board.board import Board
-from omsd.engine.registers import DON_S, IBF_E, IBF_S, INIT, IRQ_E, IRQ_S, TBE_E, TBE_S
+from omsd.engine.registers import DON_E, DON_S, IBF_E, IBF_S, INIT, IRQ_E, IRQ_S, TBE_E, TBE_S
 from omsd.models import get_model
 
 
@@ -64,3 +64,26 @@ def test_no_transmit_interrupt_request_while_initializing(model: str) -> None:
     later = board.model.init_time + 0.01
     board.advance(later)
     assert board.status_register(later) == IRQ_S | TBE_S  # ready: TBE_S, and its request
+
+
+def test_a_power_cycle_loses_the_vme_interrupt_vector_rs_keeps_it() -> None:
+    """VS4 §3.4.5: "The interrupt vector register is a byte wide read/write register. The host
+    may write the desired vector into this register at any time." A latch on the card: switched
+    off, it loses what the host wrote, and reads its power-up value (0, as a fresh board here)
+    after ``omsd ctl reset``, the control and done registers with it. Before the review a power
+    cycle kept the host's vector (0x5A read back after the reset). RS resets "the local VS4
+    microprocessor" (its page) and leaves the bus interface's vector as the host wrote it
+    (docs/decisions.md, "Flags and registers")."""
+    board = Board(get_model("VS4-040"), 0.0)
+    board.write_vector_register(0x5A, 0.0)
+    board.write_control_register(IRQ_E | DON_E, 0.0)
+    board.receive(b"RS ", 0.0)
+    assert board.read_vector_register(0.0) == 0x5A
+    assert board.read_control_register(0.0) == 0  # RS: "All interrupts are disabled"
+    board.write_control_register(IRQ_E | DON_E, 2.0)
+    board.power_cycle(2.0)
+    assert board.read_vector_register(2.0) == 0
+    assert board.read_control_register(2.0) == 0
+    assert board.read_vector_register(2.0) == Board(get_model("VS4-040"), 0.0).read_vector_register(
+        0.0
+    )
