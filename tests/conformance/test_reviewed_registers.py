@@ -9,7 +9,18 @@ from __future__ import annotations
 import pytest
 
 from omsd.board.board import Board
-from omsd.engine.registers import DON_E, DON_S, IBF_E, IBF_S, INIT, IRQ_E, IRQ_S, TBE_E, TBE_S
+from omsd.engine.registers import (
+    CMD_S,
+    DON_E,
+    DON_S,
+    IBF_E,
+    IBF_S,
+    INIT,
+    IRQ_E,
+    IRQ_S,
+    TBE_E,
+    TBE_S,
+)
 from omsd.models import get_model
 
 
@@ -87,3 +98,26 @@ def test_a_power_cycle_loses_the_vme_interrupt_vector_rs_keeps_it() -> None:
     assert board.read_vector_register(2.0) == Board(get_model("VS4-040"), 0.0).read_vector_register(
         0.0
     )
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "PC46-6", "VS4-040", "PCIX-400"])
+@pytest.mark.parametrize("clear", ["CA", "SD", "RA", "AA;RI"])
+def test_flag_commands_leave_don_s_and_the_command_error_to_the_status_read(
+    model: str, clear: str
+) -> None:
+    """Pins what the manuals leave open (docs/decisions.md, "Flags and registers"): CA "clears
+    the done flag of the addressed axis only", SD "will reset the done flags", RA resets "The
+    limit flag in the hardware status register ... The done flag register" (PC48): the axis's
+    flag and done-register bit go, DON_S ("the done flag in the status register", ID page) and
+    CMD_S stay for the status read, which "automatically" resets them (§3.4.4)."""
+    board = Board(get_model(model), 0.0)
+    sep = b";" if model.startswith("PCIX") else b" "
+    board.receive(sep.join([b"AX", b"ID", b"ZZ", b""]), 0.0)
+    board.take_bytes()
+    assert board.registers.done == 0b1
+    board.receive(clear.replace(";", sep.decode()).encode() + sep, 0.0)
+    board.take_bytes()
+    assert board.registers.done == 0
+    status = board.read_status_register(0.0)
+    assert status & (DON_S | CMD_S) == DON_S | CMD_S
+    assert not board.read_status_register(0.0) & (DON_S | CMD_S)
