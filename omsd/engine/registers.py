@@ -74,6 +74,7 @@ class Registers:
         while INIT holds TBE_S low."""
         if not self.control & IRQ_E:
             return False
+        # each enable bit sits where its status bit does (Tables 3-7 and 3-8, bits 4 to 6)
         return bool(self.control & (DON_E | IBF_E | TBE_E) & status & (DON_S | IBF_S | TBE_S))
 
     def clear_on_status_read(self) -> None:
