@@ -272,8 +272,7 @@ class Executor:
             if p.linear is not None:
                 linear.append(axis)
         saved = {a.index: (a.vl, a.ac, a.vb) for a in linear} if linear else {}
-        if linear:
-            self._interpolate(linear, targets, tick)
+        shapes = self._interpolate(linear, targets, tick) if linear else {}
         restore = machine.options.linear_moves_restore
         for axis in axes:
             if axis.index not in targets:
@@ -282,7 +281,8 @@ class Executor:
             distance = target - axis.position(tick)
             # (the kept profiles are a fast path: the straightforward board computes each)
             profile = pf.move_pieces if machine.fast_paths else pf.profile_pieces
-            pieces = profile(distance, axis.vl, axis.ac, axis.base_velocity, axis.ramp)
+            shape = shapes.get(axis.index, axis.ramp)
+            pieces = profile(distance, axis.vl, axis.ac, axis.base_velocity, shape)
             if distance:
                 axis.direction = 1 if distance > 0 else -1
             if axis.index in saved and restore:
@@ -299,14 +299,23 @@ class Executor:
                 axis.aux_timer = None
             self.arm_in(axis, target)
 
-    def _interpolate(self, axes: list[Axis], targets: dict[int, float], t: float) -> None:
+    def _interpolate(
+        self, axes: list[Axis], targets: dict[int, float], t: float
+    ) -> dict[int, pf.RampShape]:
         """Linear interpolation: "The velocity and acceleration parameters are scaled to allow
         the axes to move and finish together. All axes are scaled to the axis with the longest
-        move time." The scaled values are left in the registers (unless restored)."""
+        move time." The scaled values are left in the registers (unless restored).
+
+        Every axis of the move takes the master's ramp shape as well (returned by axis index):
+        on a board whose ramps are chosen per axis (the PCIx's LA, PR, SR, SS) an axis keeping
+        its own shape with the scaled VL and AC would end at another time and leave the
+        "straight line" (PCIx ML; MT: "to ensure all involved axes arrive at their targets
+        simultaneously"). Each axis's profile is then the master's scaled by its share of the
+        distance."""
         dist = {a.index: abs(targets[a.index] - a.position(t)) for a in axes}
         moving = [a for a in axes if dist[a.index] > 0]
         if not moving:
-            return
+            return {}
         lead = max(
             moving,
             key=lambda a: pf.move_time(dist[a.index], a.vl, a.ac, a.base_velocity, a.ramp),
@@ -317,6 +326,7 @@ class Executor:
             a.vl = lead.vl * k
             a.ac = lead.ac * k
             a.vb = base * k
+        return {a.index: lead.ramp for a in moving}
 
     def arm_in(self, axis: Axis, target: float) -> None:
         """Schedule the armed interrupt of the move just started (PC48 §6.12 IN: "The test is
