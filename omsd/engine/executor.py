@@ -294,9 +294,7 @@ class Executor:
             axis.home = None
             if axis.motion is Motion.IDLE:
                 continue
-            if axis.pa is not None:
-                axis.aux = axis.pa
-                axis.aux_timer = None
+            self.power_on(axis)
             self.arm_in(axis, target)
 
     def _interpolate(
@@ -345,6 +343,18 @@ class Executor:
         fire = max(when if when is not None else traj.end_time, decel_start)
         axis.in_fire = self.machine.clock.at_or_after(min(fire, traj.end_time))
         axis.invalidate()
+
+    def power_on(self, axis: Axis) -> None:
+        """Power automatic: a motion the axis has just begun turns the auxiliary output to its
+        moving state, if the dialect's PA drives it for that motion (the PC48's for the moves
+        of GO and GD; the PCIx's "at the beginning of every motion"). The end of the motion
+        turns it back (:meth:`Axis.power_down`)."""
+        if axis.pa is None or not axis.moving:
+            return
+        if axis.motion not in self.machine.options.power_automatic_motions:
+            return
+        axis.aux = axis.pa
+        axis.aux_timer = None
 
     def set_aux(self, axis: Axis, high: bool, t: float) -> None:
         axis.aux = high

@@ -69,6 +69,9 @@ class Options:
     #: a home search found loads the encoder of a stepper with an encoder as well as the
     #: position counter (PCIx HR: "the position and encoder counters are loaded")
     home_loads_encoder: bool = False
+    #: the motions that turn power automatic's output to its moving state as they start (PC48
+    #: §6.6 PA: "upon the execution of the GO or GD", the moves)
+    power_automatic_motions: frozenset[Motion] = frozenset({Motion.MOVE})
 
 
 class Front(Protocol):

@@ -51,6 +51,7 @@ def _jog(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     axis.direction = 1 if v > 0 else -1
     axis.begin(tick, [*ramp, pf.cruise(v)], Motion.JOG)
     axis.home = None
+    ex.power_on(axis)
     at_speed = tick + sum(p.duration for p in ramp)
     return Wait("time", until=machine.clock.at_or_after(at_speed))
 
@@ -99,6 +100,7 @@ def _staircase(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
         return None
     v0 = axis.velocity(tick)
     axis.begin(tick, [*pf.velocity_change(v0, v, axis.ac), pf.cruise(v)], Motion.STAIRCASE)
+    ex.power_on(axis)
     when = axis.traj.first_time(dest, axis.direction > 0, tick)
     if when is None:
         return Wait("motion")
@@ -143,6 +145,7 @@ def _home(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     v = direction * axis.vl
     axis.direction = direction
     axis.begin(tick, [*pf.velocity_change(v0, v, axis.ac), pf.cruise(v)], Motion.HOME)
+    ex.power_on(axis)
     points: tuple[float, ...] = ()
     if axis.home_encoder:
         points = _index_points(axis, direction)

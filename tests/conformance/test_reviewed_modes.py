@@ -11,6 +11,13 @@ interpolation and the jog variants.
   included, scaled by its share of the distance. Before, each axis kept its own ramp shape with
   the scaled VL and AC: ``AA;VL10000,10000;AC20000,20000;AY;PR5;AA;ML10000,5000;GO;`` ended X
   (linear, the master) at 1.5 s and Y (parabolic) at 1.593 s, off the line between.
+* Power automatic on the PCIx drives the auxiliary output for every motion, not only for the
+  moves of GO/GD/GN/GU: "In power-automatic mode, the auxiliary line will invert at the
+  beginning of every motion and return to normal at the end" (PCIx §5.5.1), and the queue tables
+  of TM, JG, JF, MV, HM, HR, KM, KR, CX and CG charge "If PA (power automatic) mode is active
+  add n". Before, ``AX;PA;TM1000;`` left the output idle through the timed jog (``?AB`` answered
+  ``af`` at 0.5 s; now ``an``, and ``af`` again after the jog). The PC48, PC46 and VS4 keep PA
+  to GO and GD, as their PA pages say ("upon the execution of the GO or GD").
 """
 
 from __future__ import annotations
@@ -57,3 +64,62 @@ def test_pcix_mt_axes_of_different_ramps_arrive_simultaneously() -> None:
     assert y.position(h.t) == pytest.approx(5 * x.position(h.t), abs=1e-6)
     h.run()
     assert (h.position("X"), h.position("Y")) == (2000, 10000)
+
+
+def aux_state(h: Harness) -> bytes:
+    return h.send("?AB;")
+
+
+@pytest.mark.parametrize(
+    ("start", "stop"),
+    [
+        ("TM1000;", ""),  # a timed jog ends by itself
+        ("JG10000;", "ST;"),
+        ("JF2500.5;", "ST;"),
+        ("MP;MV100000,10000;", "SP60000;"),
+        ("HM;", ""),  # the default world's home switch is met on the way
+    ],
+)
+def test_pcix_power_automatic_drives_the_output_through_every_motion(start: str, stop: str) -> None:
+    h = Harness("PCIX-004")
+    h.send("AX;PA;")
+    h.run()
+    assert aux_state(h) == b"af\n\r"  # PA: the idle state, "on at the end of the move"
+    h.send(start)
+    h.until(0.0005)
+    assert h.axis("X").moving
+    assert aux_state(h) == b"an\n\r"  # "invert at the beginning of every motion"
+    h.until(0.5)
+    h.send(stop)
+    h.run()
+    assert not h.axis("X").moving
+    assert aux_state(h) == b"af\n\r"  # "and return to normal at the end"
+
+
+def test_pcix_power_automatic_drives_the_output_through_a_contour() -> None:
+    h = Harness("PCIX-004")
+    h.send("AA;PA1,1;")
+    h.run()
+    assert h.axis("X").aux and h.axis("Y").aux  # PA1: the idle state is on (high)
+    h.send("CD0,0;MT1000,1000;CE;CX;")
+    h.until(0.0005)
+    assert h.axis("X").moving
+    assert not h.axis("X").aux and not h.axis("Y").aux
+    h.run()
+    assert h.axis("X").aux and h.axis("Y").aux
+
+
+@pytest.mark.parametrize("model", ["PC48-4", "VS4-040"])
+def test_older_boards_power_automatic_is_for_go_and_gd_only(model: str) -> None:
+    """PC48 §6.6 PA (the VS4's the same): "The auxiliary will be turned on ... upon the
+    execution of the GO or GD and off at the end of that move"; their JG tables have no PA
+    row."""
+    h = Harness(model)
+    h.send("AX PA ")
+    h.run()
+    h.send("JG10000 ")
+    h.until(0.5)
+    assert h.axis("X").moving and not h.axis("X").aux
+    h.send("ST MR1000 GO ")  # the stop takes 0.01 s, the move 0.11 s
+    h.until(0.55)
+    assert h.axis("X").moving and h.axis("X").aux

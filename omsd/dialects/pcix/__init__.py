@@ -59,6 +59,13 @@ OPTIONS = Options(
     remainder_folds_encoder=True,
     linear_moves_restore=True,
     home_loads_encoder=True,
+    # §5.5.1: "In power-automatic mode, the auxiliary line will invert at the beginning of every
+    # motion and return to normal at the end" (the PA page names GO and GD; the queue tables of
+    # TM, JG, JF, MV, HM, HR, KM, KR, CX and CG charge "If PA ... is active add n" too). Not VS,
+    # MO or gearing, whose tables have no PA row, nor the hold's own corrections.
+    power_automatic_motions=frozenset(
+        {Motion.MOVE, Motion.JOG, Motion.STAIRCASE, Motion.HOME, Motion.CONTOUR}
+    ),
 )
 
 

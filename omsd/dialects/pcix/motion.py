@@ -219,9 +219,7 @@ def _op_gu(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     axis.home = None
     if axis.motion is Motion.IDLE:
         return None
-    if axis.pa is not None:
-        axis.aux = axis.pa
-        axis.aux_timer = None
+    ex.power_on(axis)
     ex.arm_in(axis, target)
     return Wait("motion")
 
@@ -367,6 +365,7 @@ def _timed_jog(ex: Executor, axis: Axis, ms: int, tick: float) -> None:
     ex.cancel(axis, "TM")  # IS: "disabled if a ... TM command is entered"
     axis.home = None
     axis.begin(tick, pieces, Motion.JOG)
+    ex.power_on(axis)
 
 
 @handles("TM")

@@ -152,6 +152,7 @@ def run_contour(ix: Interpreter, defn: ContourDefinition, t: float, command: str
     ix.contour_lead.update(p.lead_in)  # (in AM another task's contour may still be running)
     for a in axes:
         a.begin(tick, p.pieces[a.index], Motion.CONTOUR, final=p.finals[a.index])
+        machine.executor.power_on(a)
         v = a.traj.velocity(a.traj.end_time - 1e-9) if a.traj.pieces else 0.0
         if v:
             a.direction = 1 if v > 0 else -1
