@@ -51,7 +51,9 @@ Moves
       the time, ramp down at AC. The manual gives no sign: the jog runs in the axis's direction
       (the one MP/MM set, or the last move's), as the other undirected motions (MO, MV) do. In AA
       mode "all axes begin moving at the same time". The queue waits for the jog to end. TM
-      disables slip detection (the IS page).
+      disables slip detection (the IS page). In power-automatic mode the output is in its
+      moving state for the whole jog, ramps included (§5.5.1: "invert at the beginning of every
+      motion and return to normal at the end"; ``Executor.power_on``).
 
 Limits and positions
     * TL upper,lower (§5.5.4): "If the axis reaches either of these logical limits, the PCIX will
