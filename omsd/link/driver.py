@@ -96,8 +96,9 @@ class DriverLink:
         self._notes: list[str] = []
         # when the done register was last read for a DONE marker (the link's time then)
         self._done_read_at: float | None = None
-        # the sample of the last limit given its "@" (limits on one sample are one interrupt)
-        self._limit_marked_at: float | None = None
+        # each session's sample of its last limit given its "@" (limits on one sample are one
+        # interrupt: one "@" for each session, each a host of its own)
+        self._limit_marked_at: dict[int, float] = {}
         # the time of a DONE / limit that no wait character of its session has claimed yet
         # (each one can release at most one wait)
         self._unclaimed: dict[tuple[int, int], float] = {}
@@ -396,12 +397,15 @@ class DriverLink:
             if isinstance(item, CommandErrorEvent):
                 merge(pieces, source, b"#" + eos)
             elif isinstance(item, LimitEvent):
-                if item.time == self._limit_marked_at and not status & OVRT:
+                marked = self._limit_marked_at
+                if marked.get(source) == item.time and not status & OVRT:
                     # limits reached on one sample set OVRT once: one interrupt, one "@"
                     # (§7.3.3: "A limit interrupt causes an @ character"); the first one's
-                    # read of the status register cleared the bit, and it is not set again
+                    # read of the status register cleared the bit, and it is not set again.
+                    # Another session's limit of the sample is its host's interrupt: its "@"
+                    # (and the wait it releases) is its own
                     continue
-                self._limit_marked_at = item.time
+                marked[source] = item.time
                 merge(pieces, source, b"@" + eos)
                 if mine and self._waiting == WAIT_LIMIT and item.time >= self._wait_since:
                     self._release(now)

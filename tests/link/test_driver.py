@@ -152,6 +152,34 @@ def test_limits_on_one_sample_are_one_interrupt_and_one_at_sign() -> None:
     assert h.take() == b"@\n@\n"
 
 
+def test_limits_on_one_sample_of_two_sessions_each_give_their_session_an_at_sign() -> None:
+    """The one ``@`` of a sample's limits is per session: each session is a host of its own, and
+    §7.3.4: "the driver holds off sending characters to the board until a limit interrupt
+    occurs". Session 1's X and session 2's Y reach their switches on the same sample: each
+    session is told (``@``) and session 2's ``@`` wait is released (its RP runs). Before, the
+    second limit of the sample was dropped whole: session 2 heard nothing and its wait held
+    its input for good."""
+    world = {"X": AxisWorld(positive_limit=500), "Y": AxisWorld(positive_limit=500)}
+    link = DriverLink(Board(get_model("PC48-4E"), 0.0, world=world))
+    got: dict[int, bytes] = {1: b"", 2: b""}
+
+    def read(t: float) -> None:
+        for session, data in link.to_host(t).pieces:
+            got[session] += data
+
+    link.from_host(b"AX VL10000 MR1000 GO\r", 0.0, 1)
+    read(0.0)
+    link.from_host(b"AY VL10000 MR1000 GO @ RP\r", 0.0, 2)
+    read(0.0)
+    t = 0.0
+    while (d := link.next_deadline()) is not None and d <= 1.0:
+        t = max(t, d)
+        read(t)
+    read(1.0)
+    assert got == {1: b"@\n", 2: b"@\n501\n"}
+    assert link.held() is None
+
+
 def test_markers_wait_for_the_end_of_a_reply() -> None:
     """ "If the board is returning a message when an interrupt occurs, the interrupt symbol will
     be delayed until after the end of the message string." A reply is never split."""
