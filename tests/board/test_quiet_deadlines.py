@@ -269,6 +269,23 @@ def test_an_axis_found_quiet_is_not_asked_again_until_changed_from_outside(
     assert set("UVRS") <= set(asked)
 
 
+def test_an_axis_found_quiet_is_asked_again_after_another_axis_queue_changes_it() -> None:
+    """What an axis was found to be (``AxisState.quiet_known``) is kept only while nothing
+    changes it from outside its own queue of moves: here Y runs quiet moves and is found quiet;
+    X's timed wait ends (a reaction, not a move that follows on) and X's queue runs VS, which
+    sets Y streaming towards its switch (PC48 §6.8: "The parameters are time in 1/1024 second
+    sample intervals, X velocity, and Y velocity"). Y is heard from then on: its limit comes at
+    its own time, not when X's stream next wakes the board. (Fails if ``Machine._handle_due``
+    does not bump ``outside_epoch``: the limit at 0.45 s taken at 1.2 s; the randomized streams
+    above never found that.)"""
+    pair = Pair("PC48-4")
+    moves = b"AY VL2000 AC100000" + b" MR100 GO MR-100 GO" * 3
+    pair.both(0.0, "receive", moves + b" AX WT200 VS1024,0,2000\r", 0.0, 1)
+    pair.run_until(3.0)
+    pair.both(3.0, "advance", 3.0)
+    assert [type(item).__name__ for item, _ in pair.heard["lazy"]] == ["LimitEvent"]
+
+
 def test_what_can_be_heard_is_woken_for_at_its_deadline() -> None:
     """A done, a limit: the wake-up is the deadline itself."""
     board = Board(get_model("PC48-4"), world=WORLD)
