@@ -41,6 +41,11 @@ from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
 POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
+COUNTER = 2**31 - 1
+"""The largest slip (steps) or encoder count the ``slip`` and ``encoder`` operations take, either
+way: what a 32-bit counter holds, beyond every position range of the manuals (PC48 Appendix C:
+"Position range 134,000,000 pulses (+-67,000,000)"). Two slips of 1e308 took the carriage to
+infinity, and every later look at the board raised OverflowError."""
 
 
 class SocketInUse(Exception):
@@ -376,7 +381,7 @@ class ControlServer:
         return None
 
     def _op_slip(self, service: BoardService, m: dict[str, Any]) -> Any:
-        steps = _number(m, "steps")
+        steps = _counter(m, "steps")
         service.board.inject_slip(self._axis(service, m), steps, service.clock())
         return None
 
@@ -386,7 +391,7 @@ class ControlServer:
         return None
 
     def _op_encoder(self, service: BoardService, m: dict[str, Any]) -> Any:
-        counts = int(_number(m, "counts"))
+        counts = int(_counter(m, "counts"))
         service.board.set_encoder_input(self._axis(service, m), counts, service.clock())
         return None
 
@@ -530,6 +535,14 @@ def _number(m: dict[str, Any], key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ControlError(f"{key}: expected a number, got {value!r}")
     return float(value)
+
+
+def _counter(m: dict[str, Any], key: str) -> float:
+    """A number of steps or counts a board's counters can hold (:data:`COUNTER`)."""
+    value = _number(m, key)
+    if not -COUNTER <= value <= COUNTER:
+        raise ControlError(f"{key}: expected -{COUNTER} to {COUNTER}, got {value:g}")
+    return value
 
 
 def _alive(path: Path) -> bool:

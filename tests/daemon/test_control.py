@@ -152,6 +152,30 @@ def test_a_slip_without_is_is_only_seen_by_the_encoder(bench: Callable[..., Benc
     assert c.quiet(0.05) == b""
 
 
+def test_a_slip_or_an_encoder_beyond_any_counter_is_refused_and_the_board_goes_on(
+    bench: Callable[..., Bench],
+) -> None:
+    """Two slips of 1e308 steps took X's carriage to infinity: every later look at the board
+    (``state``, ``AX RE``) raised OverflowError, the daemon answered nothing and closed the TCP
+    client, for good. No counter of the card holds such a number (PC48 Appendix C: "Position
+    range 134,000,000 pulses (+-67,000,000)"; a PCIx's LP is within +-33,554,431): a slip or
+    an encoder count beyond a 32-bit counter is refused in one line, and the board goes on."""
+    b = bench()
+    for op in ("slip", "encoder"):
+        key = "steps" if op == "slip" else "counts"
+        for value in (1e308, -1e308, 2.0**31, -(2.0**31) - 1):
+            with pytest.raises(ControlError, match=key) as refused:
+                b.ctl.call(op, axis="X", **{key: value})
+            assert "\n" not in str(refused.value)
+    assert b.ctl.call("slip", axis="X", steps=2**31 - 1)["axes"]["X"]["encoder"] == 2**31 - 1
+    assert b.ctl.call("encoder", axis="X", counts=-(2**31) + 1)["axes"]["X"]["encoder"] == (
+        -(2**31) + 1
+    )
+    c = b.connect()
+    assert c.ask(b"AX RE") == str(-(2**31) + 1).encode()
+    assert c.ask(b"WY") == WY
+
+
 # -- the cable ------------------------------------------------------------------------------------
 
 
