@@ -28,6 +28,7 @@ import contextlib
 import hmac
 import importlib.resources
 import json
+import logging
 from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
@@ -56,6 +57,29 @@ COALESCE_BYTES = 64 * 1024
 
 HEARTBEAT = 20.0
 """Seconds between WebSocket pings: a page that has gone (a laptop closed) is noticed."""
+
+
+class _OneLine(logging.Handler):
+    """aiohttp's own complaints (a request it could not parse, a handler that raised: its
+    ``aiohttp.server`` logger's ``exception``) as one line each in the daemon's log, instead of
+    a traceback on standard error, past the log and its view (Python's last-resort handler)."""
+
+    def __init__(self, log: TrafficLog) -> None:
+        super().__init__(logging.WARNING)
+        self.log = log
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = record.getMessage()
+        exc = record.exc_info[1] if record.exc_info else None
+        if exc is not None:
+            reason = getattr(exc, "message", None) or str(exc) or type(exc).__name__
+            text = f"{text}: {reason}"
+        line = " ".join(str(text).split())
+        self.log.warning(f"web dashboard: {line[:300]}")
+
+
+_AIOHTTP = logging.getLogger("aiohttp")
+"""The parent of aiohttp's loggers (``aiohttp.server``, ``aiohttp.websocket``...)."""
 
 
 class SocketWriter:
@@ -126,6 +150,7 @@ class WebServer:
         self.runner: web.AppRunner | None = None
         self.sockets: set[web.WebSocketResponse] = set()
         self.address: tuple[str, int] | None = None
+        self._handler: _OneLine | None = None
 
     async def start(self) -> tuple[str, int]:
         """Listen; returns the host and port (the port the system chose for port 0). An
@@ -134,6 +159,9 @@ class WebServer:
         app.router.add_get("/", self._page)
         app.router.add_get("/ws", self._socket)
         app.router.add_static("/static/", str(STATIC), follow_symlinks=False)
+        self._handler = _OneLine(self.log)
+        _AIOHTTP.addHandler(self._handler)
+        _AIOHTTP.propagate = False
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await runner.setup()
         self.runner = runner
@@ -156,6 +184,10 @@ class WebServer:
         runner, self.runner = self.runner, None
         if runner is not None:
             await runner.cleanup()
+        if self._handler is not None:
+            _AIOHTTP.removeHandler(self._handler)
+            _AIOHTTP.propagate = not _AIOHTTP.handlers
+            self._handler = None
         await self.control.close()  # the dashboard's own control server: its subscriptions
 
     # -- guards ---------------------------------------------------------------------------------
@@ -168,12 +200,12 @@ class WebServer:
             if not hmac.compare_digest(given.encode(), token.encode()):
                 return "this dashboard needs its token: open it as /?token=..."
         if self.config.loopback:
-            host = urlsplit(f"//{request.host}").hostname or ""
-            if not is_loopback(host):
+            host = _host_name(f"//{request.host}")
+            if host is None or not is_loopback(host):
                 return f"Host {request.host!r} is not this machine (the dashboard is on loopback)"
         if websocket:
             origin = request.headers.get("Origin")
-            if origin is not None and urlsplit(origin).netloc != request.host:
+            if origin is not None and _netloc(origin) != request.host:
                 return f"Origin {origin!r} is not this dashboard's"
         return None
 
@@ -233,6 +265,22 @@ class WebServer:
             with contextlib.suppress(Exception):
                 await socket.close()
         return socket
+
+
+def _host_name(url: str) -> str | None:
+    """The host name of ``url``; None for what is no URL's (``//[::1``: urlsplit raises)."""
+    try:
+        return urlsplit(url).hostname
+    except ValueError:
+        return None
+
+
+def _netloc(url: str) -> str | None:
+    """The ``host:port`` of ``url``; None for what is no URL's."""
+    try:
+        return urlsplit(url).netloc
+    except ValueError:
+        return None
 
 
 __all__ = ["STATIC", "SocketWriter", "WebServer"]

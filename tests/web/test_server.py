@@ -297,6 +297,56 @@ async def test_a_page_that_goes_leaves_nothing_behind(tmp_path: Path) -> None:
             assert service.observers == []
 
 
+async def raw_http(url: str, request: bytes) -> bytes:
+    """The status line and headers the dashboard answers to ``request``, sent as it is on a
+    socket of its own."""
+    host, port = url[len("http://") :].rsplit(":", 1)
+    reader, writer = await asyncio.open_connection(host, int(port))
+    try:
+        writer.write(request)
+        return await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), WAIT)
+    finally:
+        writer.close()
+
+
+async def test_malformed_requests_get_a_status_and_one_line_never_a_traceback(
+    tmp_path: Path, capfd: pytest.CaptureFixture[str]
+) -> None:
+    """Anyone who reaches the port can send anything. A Host or an Origin that is no URL's
+    (``[::1`` without its bracket) made the guard raise ValueError: a 500, and a traceback on
+    standard error; a header longer than aiohttp's 8,190 bytes, or ten thousand of them, got
+    their 400 but printed a traceback each on standard error too, past the daemon's log and
+    its ``view = "off"``. Each now gets its status and at most one line in the daemon's log."""
+    async with dashboard(tmp_path, control=True) as dash:
+        here = dash.url[len("http://") :]
+        for request, status in [
+            (b"GET / HTTP/1.1\r\nHost: [::1\r\n\r\n", b"403"),
+            (
+                f"GET /ws HTTP/1.1\r\nHost: {here}\r\nOrigin: http://[::1\r\n"
+                "Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+                "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n".encode(),
+                b"403",
+            ),
+            (b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-A: " + b"a" * 100_000 + b"\r\n\r\n", b"400"),
+            (b"GET /" + b"a" * 100_000 + b" HTTP/1.1\r\n\r\n", b"400"),
+            (
+                b"GET / HTTP/1.1\r\n" + b"".join(b"X-%d: a\r\n" % i for i in range(10_000)),
+                b"400",
+            ),
+        ]:
+            answer = await raw_http(dash.url, request)
+            assert answer.split(b" ", 2)[1] == status, answer[:200]
+            assert b"Traceback" not in answer
+        async with page(dash) as p:  # the dashboard goes on
+            assert (await p.next() or {}).get("kind") == "hello"
+        said = dash.log.getvalue()
+    out, err = capfd.readouterr()
+    assert "Traceback" not in out + err and "Error handling" not in err, err[-2000:]
+    web_lines = [line for line in said.splitlines() if "web dashboard:" in line]
+    assert 1 <= len(web_lines) <= 3, said
+    assert all("Traceback" not in line and len(line) < 400 for line in web_lines), web_lines
+
+
 # -- start-up -------------------------------------------------------------------------------------
 
 
