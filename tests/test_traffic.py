@@ -502,3 +502,50 @@ def test_reopen_without_a_file_or_that_fails(tmp_path: pathlib.Path) -> None:
         log.info("still written")
     assert "cannot reopen: No such file or directory" in out.getvalue()
     assert "still written" in (tmp_path / "t.jsonl.1").read_text()
+
+
+def test_a_full_disk_leaves_whole_lines_and_the_reopened_file_goes_on(
+    tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A disk that fills in the middle of a record (ENOSPC after part of it was written) left
+    that part at the end of the file; the SIGHUP that reopened it once there was room again
+    appended its first line to the part, and a reader lost both ("... Oregon Micro {"t": ...,
+    "message": "reopened log files on SIGHUP: ..."}"). The part is now taken back: the file
+    holds whole lines only, and goes on after the reopen."""
+    path = tmp_path / "traffic.jsonl"
+    out = io.StringIO()
+    log = TrafficLog("plain", file=path, stream=out, env={}, clock=lambda: 1.0)
+    log.info("before")
+    real_write = os.write
+    fd = log._fd
+
+    def full(to: int, data: bytes | memoryview) -> int:
+        if to != fd:
+            return real_write(to, data)
+        if len(data) > 10:
+            return real_write(to, bytes(data[:10]))  # what fitted
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "write", full)
+    log.record(wy())
+    monkeypatch.setattr(os, "write", real_write)
+    assert "no longer written" in out.getvalue()
+    assert log.reopen() is True  # room again; SIGHUP
+    log.info("after")
+    log.close()
+    lines = path.read_text().splitlines()
+    assert [json.loads(line).get("message") for line in lines] == ["before", "after"]
+
+
+def test_a_line_cut_short_by_a_crash_is_not_joined_to_the_next_one(tmp_path: pathlib.Path) -> None:
+    """A daemon killed in the middle of a line loses that line (see above); the next daemon
+    appending to the file must not lose its own first line too by writing it onto the cut one."""
+    path = tmp_path / "traffic.jsonl"
+    path.write_text('{"t": 1.0, "kind": "info", "message": "whole"}\n{"t": 2.0, "kind": "inf')
+    with TrafficLog("off", file=path, env={}, clock=lambda: 3.0) as log:
+        log.info("next daemon")
+    lines = path.read_text().split("\n")
+    assert lines[-1] == ""
+    assert json.loads(lines[0])["message"] == "whole"
+    assert lines[1] == '{"t": 2.0, "kind": "inf'
+    assert json.loads(lines[2])["message"] == "next daemon"

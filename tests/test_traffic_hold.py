@@ -480,8 +480,9 @@ def test_a_file_failing_part_way_keeps_a_prefix_of_the_lines(
     tmp_path: pathlib.Path, monkeypatch: pytest.MonkeyPatch, limit: int, held: bool
 ) -> None:
     """The disk fills after ``limit`` bytes of the file: what is in it is the start of what a
-    working file would hold, the error is said once, the file is closed (it is no longer
-    written to) and every line of the view is still written, in order."""
+    working file would hold, in whole lines (the part of a line that fitted is taken back), the
+    error is said once, the file is closed (it is no longer written to) and every line of the
+    view is still written, in order."""
     calls: list[tuple[Any, ...]] = []
     for i in range(40):
         calls.append(("hold",) if i % 7 == 0 else ("record", 9.0, "b", "e", Direction.OUT, b"0\n"))
@@ -519,7 +520,8 @@ def test_a_file_failing_part_way_keeps_a_prefix_of_the_lines(
     log.close()
     monkeypatch.undo()
     kept = failing.path.read_bytes()
-    assert kept == full[: len(kept)] and len(kept) == min(limit, len(full))
+    assert kept == full[: len(kept)]
+    assert len(kept) == full.rfind(b"\n", 0, min(limit, len(full))) + 1
     if limit < len(full):
         errors = errors_in(failing.stream.getvalue())
         assert len(errors) == 1 and "no longer written" in errors[0]

@@ -87,6 +87,7 @@ The log is not thread-safe; the daemon calls it from its one event-loop thread.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import sys
@@ -285,6 +286,7 @@ class TrafficLog:
                 self._fd = open_log(file, group)
             except OSError as exc:
                 raise TrafficLogError(exc.errno, exc.strerror or str(exc), str(file)) from exc
+            self._end_cut_line(file, self._fd)
         self._held = 0  # depth of hold() calls not yet released
         self._queue: list[_Entry] = []  # what was logged while held, in order
         self._filed = 0  # how many of them are in the file already (write_kept)
@@ -385,6 +387,7 @@ class TrafficLog:
         except OSError as exc:
             self.error(f"traffic log {self.path}: cannot reopen: {exc.strerror or exc}")
             return False
+        self._end_cut_line(self.path, fd)
         old, self._fd = self._fd, fd
         self._wanted()
         if old is not None:
@@ -524,15 +527,38 @@ class TrafficLog:
 
     def _write_file(self, text: str) -> None:
         assert self._fd is not None
-        view = memoryview(text.encode("ascii"))  # ensure_ascii: always ASCII
+        data = text.encode("ascii")  # ensure_ascii: always ASCII
+        view = memoryview(data)
+        written = 0
         try:
             while view:
-                view = view[os.write(self._fd, view) :]
+                n = os.write(self._fd, view)
+                written += n
+                view = view[n:]
         except OSError as exc:
             fd, self._fd = self._fd, None
             self._wanted()
+            # the part of a line that fitted (a full disk) is taken back: the file keeps whole
+            # lines, and what is appended after a reopen starts a line of its own
+            cut = written - (data.rfind(b"\n", 0, written) + 1)
+            if cut:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, os.fstat(fd).st_size - cut)
             os.close(fd)
             self.error(f"traffic log {self.path}: {exc.strerror}; no longer written")
+
+    @staticmethod
+    def _end_cut_line(path: pathlib.Path, fd: int) -> None:
+        """A file that ends in the middle of a line (its writer was killed while writing it)
+        gets its line ended, so that the first line written now is a line of its own."""
+        with contextlib.suppress(OSError):
+            if os.fstat(fd).st_size == 0:
+                return
+            with open(path, "rb") as file:
+                file.seek(-1, os.SEEK_END)
+                last = file.read(1)
+            if last not in (b"", b"\n"):
+                os.write(fd, b"\n")
 
     # ----------------------------------------------------------------- the stream
 
