@@ -58,6 +58,23 @@ COALESCE_BYTES = 64 * 1024
 HEARTBEAT = 20.0
 """Seconds between WebSocket pings: a page that has gone (a laptop closed) is noticed."""
 
+MAX_CONNECTIONS = 64
+"""Connections the dashboard holds at once; a newcomer beyond them is told so and closed. A
+browser opens six at most to one server, so this is many pages. Without a bound, anyone who
+could reach the port (a token is asked for only once a request is made) could hold every file
+descriptor of the daemon, and its boards could take no client."""
+
+HEAD_TIMEOUT = 10.0
+"""Seconds a new connection has to send its first request's head (the request line and the
+headers): a client that sends a byte a second (slowloris) is closed, not kept for ever."""
+
+BUSY = (
+    b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
+    b"Connection: close\r\nContent-Length: 49\r\n\r\n"
+    b"omsd: the dashboard has too many connections now\n"
+)
+"""What a connection beyond :data:`MAX_CONNECTIONS` is told before it is closed."""
+
 
 class _OneLine(logging.Handler):
     """aiohttp's own complaints (a request it could not parse, a handler that raised: its
@@ -151,6 +168,18 @@ class WebServer:
         self.sockets: set[web.WebSocketResponse] = set()
         self.address: tuple[str, int] | None = None
         self._handler: _OneLine | None = None
+        self._listener: asyncio.Server | None = None
+
+    def _protocol(self) -> asyncio.BaseProtocol:
+        """A new connection's protocol: aiohttp's, with a deadline for its first request's head
+        (:data:`HEAD_TIMEOUT`); beyond :data:`MAX_CONNECTIONS`, one that says so and closes."""
+        assert self.runner is not None and self.runner.server is not None
+        server = self.runner.server
+        if len(server.connections) >= MAX_CONNECTIONS:
+            return _Busy()
+        handler = server()
+        asyncio.get_running_loop().call_later(HEAD_TIMEOUT, _head_deadline, handler)
+        return handler
 
     async def start(self) -> tuple[str, int]:
         """Listen; returns the host and port (the port the system chose for port 0). An
@@ -165,12 +194,12 @@ class WebServer:
         runner = web.AppRunner(app, access_log=None, handle_signals=False)
         await runner.setup()
         self.runner = runner
-        site = web.TCPSite(runner, self.config.listen.host, self.config.listen.port)
         try:
-            await site.start()
-            server = site._server
-            assert isinstance(server, asyncio.Server)
-            host, port = bound_address(server, self.config.listen.host)
+            loop = asyncio.get_running_loop()
+            self._listener = await loop.create_server(
+                self._protocol, self.config.listen.host, self.config.listen.port
+            )
+            host, port = bound_address(self._listener, self.config.listen.host)
         except BaseException:
             await self.close()
             raise
@@ -178,6 +207,9 @@ class WebServer:
         return host, port
 
     async def close(self) -> None:
+        listener, self._listener = self._listener, None
+        if listener is not None:
+            listener.close()
         for socket in list(self.sockets):
             with contextlib.suppress(Exception):
                 await socket.close()
@@ -265,6 +297,23 @@ class WebServer:
             with contextlib.suppress(Exception):
                 await socket.close()
         return socket
+
+
+class _Busy(asyncio.Protocol):
+    """A connection beyond :data:`MAX_CONNECTIONS`: told so, and closed."""
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        transport.write(BUSY)
+        transport.close()
+
+
+def _head_deadline(handler: web.RequestHandler) -> None:
+    """Close ``handler``'s connection if no request head has come on it yet (aiohttp counts
+    the heads it has parsed in ``_request_count``)."""
+    transport = handler.transport
+    if transport is not None and getattr(handler, "_request_count", 1) == 0:
+        transport.close()
 
 
 def _host_name(url: str) -> str | None:

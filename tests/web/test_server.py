@@ -347,6 +347,47 @@ async def test_malformed_requests_get_a_status_and_one_line_never_a_traceback(
     assert all("Traceback" not in line and len(line) < 400 for line in web_lines), web_lines
 
 
+async def test_a_slow_request_is_closed_and_connections_are_bounded(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A client that sends its request's head a byte a second (slowloris) was kept for good
+    (still open after 150 s), and there was no bound on such connections: with the daemon's
+    descriptors held by them (1,100 against a limit of 200), board a's TCP endpoint could
+    take no client ('socket.accept() out of system resource'). Now a head must come within
+    HEAD_TIMEOUT, and beyond MAX_CONNECTIONS a newcomer is told so in one line and closed;
+    the boards are served throughout."""
+    import omsd.web.server as module
+
+    monkeypatch.setattr(module, "HEAD_TIMEOUT", 0.5, raising=False)
+    monkeypatch.setattr(module, "MAX_CONNECTIONS", 5, raising=False)
+    async with dashboard(tmp_path) as dash:
+        host, port = dash.url[len("http://") :].rsplit(":", 1)
+        slow = []
+        for _ in range(5):
+            reader, writer = await asyncio.open_connection(host, int(port))
+            writer.write(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ")
+            slow.append((reader, writer))
+        await asyncio.sleep(0.1)
+        busy = await raw_http(dash.url, b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+        assert busy.startswith(b"HTTP/1.1 503 "), busy
+        assert await board_says(dash.ports["xy"], b"WY\n") == b"PC48 ver 3.00-4\n"
+        started = time.monotonic()
+        for reader, writer in slow:  # a byte now and then does not keep them
+            for _ in range(50):
+                with contextlib.suppress(ConnectionError):
+                    writer.write(b"a")
+                if reader.at_eof() or time.monotonic() - started > WAIT:
+                    break
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(reader.read(), 0.1)
+            assert reader.at_eof(), "a slow request head was kept past HEAD_TIMEOUT"
+            writer.close()
+        async with page(dash) as p:  # room again
+            assert (await p.next() or {}).get("kind") == "hello"
+            await asyncio.sleep(0.8)  # a page, once its request came, is not cut at the deadline
+            assert (await p.ask("boards"))["ok"] is True
+
+
 # -- start-up -------------------------------------------------------------------------------------
 
 
