@@ -362,7 +362,7 @@ class ControlServer:
             direction = 1
         elif direction in ("-", "negative"):
             direction = -1
-        if direction not in (1, -1):
+        if isinstance(direction, bool) or direction not in (1, -1):
             raise ControlError(f"direction: expected +1 or -1, got {direction!r}")
         axis = self._axis(service, m)
         service.board.set_limit(axis, int(direction), self._flag(m, "active"), service.clock())
@@ -375,7 +375,11 @@ class ControlServer:
 
     def _op_input(self, service: BoardService, m: dict[str, Any]) -> Any:
         bit = m.get("bit")
-        if not isinstance(bit, int) or not 0 <= bit < service.model.io_bits:
+        if (
+            isinstance(bit, bool)
+            or not isinstance(bit, int)
+            or not 0 <= bit < service.model.io_bits
+        ):
             raise ControlError(f"bit: expected 0..{service.model.io_bits - 1}, got {bit!r}")
         service.board.set_input(bit, self._flag(m, "high"), service.clock())
         return None

@@ -750,6 +750,13 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
             (b'{"id":NaN,"op":"boards"}\n', None, "NaN"),
             (b'{"id":10,"op":"slip","axis":"X","steps":-Infinity}\n', None, "Infinity"),
             (b"[" * 30000 + b"\n", None, "nested too deeply"),
+            # JSON's true is no number: it drove input 1 and closed X's positive limit
+            (b'{"id":11,"op":"input","bit":true,"high":false}\n', 11, "bit"),
+            (
+                b'{"id":12,"op":"limit","axis":"X","direction":true,"active":true}\n',
+                12,
+                "direction",
+            ),
         ]:
             reply = raw_request(s, reader, line)
             assert reply["id"] == ident and reply["ok"] is False, reply
@@ -760,6 +767,7 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
     # the board itself was not touched by any of it
     axis = b.axis()
     assert (axis["position"], axis["encoder"], axis["limit_positive"]) == (0, 0, False)
+    assert b.ctl.state()["world"] == {"limits": {}, "home": {}, "stalled": [], "inputs": {}}
 
 
 def test_an_overlong_line_is_refused_and_the_connection_closed(
