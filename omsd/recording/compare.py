@@ -133,8 +133,8 @@ def align(
     unit ``j`` of the second."""
 
     def confirmed(p: int, q: int) -> bool:
-        if p >= n or q >= m:
-            return p >= n and q >= m
+        if p >= n or q >= m:  # a skip to the end of both sides, never past either
+            return p == n and q == m
         for r in range(CONFIRM):
             if p + r >= n or q + r >= m:
                 return True

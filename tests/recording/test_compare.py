@@ -111,6 +111,18 @@ def test_alignment_changed_missing_extra_each_one_row() -> None:
     assert pairs("abcdefghijklmnopq", "ABCDEFGHIJKLMNOPQ") == [(i, i) for i in range(17)]
 
 
+def test_alignment_never_pairs_past_the_end_of_either_side() -> None:
+    """A recording whose card said one thing (``AX RP`` -> ``5``) where omsd said two made
+    ``omsd replay`` die with a traceback (IndexError in compare): a skip that took both sides
+    past their ends was taken as a match, and the pairs named units that are not there. Every
+    unit is now paired once, and only units that exist."""
+    for card, omsd in [("a", "bc"), ("ab", "c"), ("a", "xyz"), ("xyz", "a"), ("ab", "cdefg")]:
+        got = pairs(card, omsd)
+        assert sorted(i for i, _ in got if i is not None) == list(range(len(card))), got
+        assert sorted(j for _, j in got if j is not None) == list(range(len(omsd))), got
+    assert pairs("a", "bc") == [(0, 0), (None, 1)]
+
+
 def unit(t: float, data: bytes, command: int = 0, speed: float = 0.0) -> Unit:
     return Unit(t, data, data[:1] in (b"!", b"@", b"$"), command, speed)
 
