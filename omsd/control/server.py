@@ -41,6 +41,12 @@ from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
 POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
+MAX_WAITS = 256
+"""``wait`` operations in progress at once, of all the connections of one control server (the
+socket's, the dashboard's, the MQTT bridge's); one more is refused. Each wakes at every change
+of its board: 20,000 of them, sent in one go, took the daemon's whole CPU, every board stopped
+answering and SIGTERM went unheard."""
+
 COUNTER = 2**31 - 1
 """The largest slip (steps) or encoder count the ``slip`` and ``encoder`` operations take, either
 way: what a 32-bit counter holds, beyond every position range of the manuals (PC48 Appendix C:
@@ -66,6 +72,8 @@ class ControlServer:
         self.paths: list[Path] = []
         self._tasks: set[asyncio.Task[None]] = set()
         self._writers: set[Writer] = set()
+        self._requests: dict[Writer, set[asyncio.Task[None]]] = {}  # in progress, by connection
+        self._waits = 0  # wait operations in progress
         self.subscriptions: dict[Writer, Subscription] = {}
 
     # -- listening ------------------------------------------------------------------------------
@@ -155,9 +163,15 @@ class ControlServer:
         task = asyncio.get_running_loop().create_task(self._request(line, writer, lock, allowed))
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
+        mine = self._requests.setdefault(writer, set())
+        mine.add(task)
+        task.add_done_callback(mine.discard)
 
     def forget(self, writer: Writer) -> None:
-        """A connection has ended: its subscription, if any, ends, and its writer is closed."""
+        """A connection has ended: what it asked and is still in progress (its waits) ends, its
+        subscription, if any, ends, and its writer is closed."""
+        for task in self._requests.pop(writer, ()):
+            task.cancel()
         self._writers.discard(writer)
         subscription = self.subscriptions.pop(writer, None)
         if subscription is not None:
@@ -466,14 +480,24 @@ class ControlServer:
         # (Machine.next_wakeup) may not have brought up to date
         service.service()
         check = self._condition(service, m, until)
+        if check():
+            return self._state(service)
+        if self._waits >= MAX_WAITS:
+            raise ControlError(f"too many waits in progress ({MAX_WAITS}): wait for one to end")
         woken = asyncio.Event()
         watcher = _Watcher(woken)
         service.observers.append(watcher)
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout
+        self._waits += 1
+        changed = False
         try:
             while True:
-                service.service()
+                # woken by a change, the board has just run; only a wait that woke by itself
+                # runs it (running it tells every watcher it changed: two waits that each ran
+                # it when woken woke each other for ever, at 100 % of a core)
+                if not changed:
+                    service.service()
                 if check():
                     return self._state(service)
                 left = deadline - loop.time()
@@ -481,9 +505,13 @@ class ControlServer:
                     raise ControlError(f"timed out after {timeout:g} s waiting for {until}")
                 woken.clear()
                 poll = POSITION_POLL if until == "position" else left
-                with contextlib.suppress(TimeoutError):
+                try:
                     await asyncio.wait_for(woken.wait(), timeout=min(left, max(poll, 0.001)))
+                    changed = True
+                except TimeoutError:
+                    changed = False
         finally:
+            self._waits -= 1
             service.observers.remove(watcher)
 
     def _condition(

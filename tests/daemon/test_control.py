@@ -619,6 +619,67 @@ def test_a_wait_that_times_out_is_a_one_line_error(bench: Callable[..., Bench]) 
     assert b.ctl.state()["board"] == "board1"  # the connection is still good
 
 
+def cpu_seconds(pid: int) -> float:
+    """User and system time the process has used (``/proc/<pid>/stat``)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def test_two_waits_on_an_idle_board_leave_the_daemon_idle(bench: Callable[..., Bench]) -> None:
+    """Two ``wait``s on one board, nothing moving: each wait ran the board at every wake-up,
+    which told every other wait that the board had changed, which ran the board...: the daemon
+    spun at 100 % of a core for as long as they waited (and 20,000 of them sent in one go
+    stopped every board answering, SIGTERM included). A wait now runs the board only when no
+    change woke it."""
+    b = bench()
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(TIMEOUT)
+        s.connect(str(b.socket))
+        reader = s.makefile("rb")
+        for ident in (1, 2):
+            s.sendall(b'{"id":%d,"op":"wait","until":"done","axis":"X","timeout":60}\n' % ident)
+        assert b.ctl.state()["board"] == "board1"  # both are in progress by now
+        pid = b.daemon.proc.pid
+        before = cpu_seconds(pid)
+        time.sleep(1.0)
+        assert cpu_seconds(pid) - before < 0.3
+        c = b.connect()
+        c.send(b"AX MR10 GO ID ")
+        c.expect(b"!\x01\n")
+        replies = [json.loads(reader.readline()) for _ in range(2)]
+        assert sorted(r["id"] for r in replies) == [1, 2] and all(r["ok"] for r in replies)
+
+
+def test_waits_are_bounded_and_end_with_their_connection(bench: Callable[..., Bench]) -> None:
+    """Waits in progress are bounded (``MAX_WAITS``: one more gets a one-line error), and a
+    connection's waits end when it goes: they went on to their timeout (an hour at most) after
+    their client had gone, with nobody to answer."""
+    import omsd.control.server
+
+    limit = getattr(omsd.control.server, "MAX_WAITS", 256)
+    b = bench()
+    request = b'{"id":%d,"op":"wait","until":"done","axis":"X","timeout":3600}\n'
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(TIMEOUT)
+        s.connect(str(b.socket))
+        reader = s.makefile("rb")
+        s.sendall(b"".join(request % i for i in range(limit + 1)))
+        refused = json.loads(reader.readline())
+        assert refused["ok"] is False and "too many waits" in refused["error"], refused
+    # the connection has gone, and its waits with it: there is room for new ones
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(TIMEOUT)
+        s.connect(str(b.socket))
+        reader = s.makefile("rb")
+        deadline = time.monotonic() + TIMEOUT
+        while True:
+            s.sendall(b'{"id":1,"op":"wait","until":"done","axis":"X","timeout":0.01}\n')
+            reply = json.loads(reader.readline())
+            if "timed out" in reply["error"] or time.monotonic() > deadline:
+                break
+        assert "timed out" in reply["error"], reply
+
+
 def test_a_wait_does_not_hold_up_other_requests_on_the_same_connection(
     bench: Callable[..., Bench],
 ) -> None:
