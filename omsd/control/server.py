@@ -505,8 +505,11 @@ class ControlServer:
                     raise ControlError(f"timed out after {timeout:g} s waiting for {until}")
                 woken.clear()
                 poll = POSITION_POLL if until == "position" else left
+                # asyncio.timeout, not wait_for: Python 3.11's wait_for swallows a cancel that
+                # comes as the event is set, and the wait of a client that has gone went on
                 try:
-                    await asyncio.wait_for(woken.wait(), timeout=min(left, max(poll, 0.001)))
+                    async with asyncio.timeout(min(left, max(poll, 0.001))):
+                        await woken.wait()
                     changed = True
                 except TimeoutError:
                     changed = False
