@@ -41,6 +41,11 @@ from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
 POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
+MAX_PENDING = 512
+"""Requests of one connection in progress at once (waits included: at most ``MAX_WAITS``); with
+that many, the connection is read no further until one is answered. A client that asked and
+never read the answers had every line it sent made a task at once: 1.6 GB in 15 s."""
+
 MAX_WAITS = 256
 """``wait`` operations in progress at once, of all the connections of one control server (the
 socket's, the dashboard's, the MQTT bridge's); one more is refused. Each wakes at every change
@@ -146,6 +151,7 @@ class ControlServer:
                 if not line.strip():
                     continue
                 self.request(line, writer, lock)
+                await self.backlog(writer)
         finally:
             self.forget(writer)
 
@@ -166,6 +172,13 @@ class ControlServer:
         mine = self._requests.setdefault(writer, set())
         mine.add(task)
         task.add_done_callback(mine.discard)
+
+    async def backlog(self, writer: Writer) -> None:
+        """Wait while the connection of ``writer`` has :data:`MAX_PENDING` requests in
+        progress: what it sends next waits in its socket, and a client that never reads its
+        answers is held off instead of buffered."""
+        while len(mine := self._requests.get(writer, ())) >= MAX_PENDING:
+            await asyncio.wait(set(mine), return_when=asyncio.FIRST_COMPLETED)
 
     def forget(self, writer: Writer) -> None:
         """A connection has ended: what it asked and is still in progress (its waits) ends, its

@@ -286,6 +286,7 @@ class WebServer:
                     line = message.data.encode()
                     if line.strip():
                         self.control.request(line, writer, lock, allowed)
+                        await self.control.backlog(writer)
                 elif message.type is WSMsgType.ERROR:
                     break
                 # binary frames are not the protocol's: ignored

@@ -685,6 +685,45 @@ def test_waits_are_bounded_and_end_with_their_connection(bench: Callable[..., Be
         assert "timed out" in reply["error"], reply
 
 
+def rss_kib(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    raise AssertionError("no VmRSS")
+
+
+def test_a_client_that_asks_and_never_reads_is_held_off_not_buffered(
+    bench: Callable[..., Bench],
+) -> None:
+    """Each request line became a task at once, whatever was still waiting to be answered: a
+    client that sent ``state`` requests as fast as it could and read none of the answers took
+    the daemon from 55 MB to 1.6 GB in 15 s (through the web dashboard, read-only as it was),
+    and the board's round trips to a second. Now a connection with ``MAX_PENDING`` requests
+    in progress is read no further until one is answered: the client is held off by its own
+    socket, and the daemon's memory stays put."""
+    b = bench()
+    pid = b.daemon.proc.pid
+    c = b.connect()
+    before = rss_kib(pid)
+    request = b'{"id":1,"op":"state"}\n' * 1000
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        s.settimeout(1.0)
+        s.connect(str(b.socket))
+        deadline = time.monotonic() + 4.0
+        sent = 0
+        while time.monotonic() < deadline:
+            try:
+                s.sendall(request)
+            except TimeoutError:
+                break  # held off
+            sent += 1000
+        grown = rss_kib(pid) - before
+        assert c.ask(b"WY") == WY
+        assert grown < 50_000, f"{grown} KiB more after {sent} requests"
+        assert sent < 200_000
+
+
 def test_a_wait_does_not_hold_up_other_requests_on_the_same_connection(
     bench: Callable[..., Bench],
 ) -> None:

@@ -14,6 +14,7 @@ import asyncio
 import contextlib
 import io
 import json
+import socket
 import time
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
@@ -386,6 +387,37 @@ async def test_a_slow_request_is_closed_and_connections_are_bounded(
             assert (await p.next() or {}).get("kind") == "hello"
             await asyncio.sleep(0.8)  # a page, once its request came, is not cut at the deadline
             assert (await p.ask("boards"))["ok"] is True
+
+
+async def test_a_page_that_asks_and_never_reads_is_held_off(tmp_path: Path) -> None:
+    """A page (read-only: ``state`` is a watcher's op) that sent requests as fast as it could
+    and read none of the answers had every frame made a task at once: the daemon went from
+    55 MB to 1.6 GB in 15 s. Now its WebSocket is read no further while ``MAX_PENDING`` of its
+    requests are in progress."""
+    from omsd.control.server import MAX_PENDING
+
+    async with dashboard(tmp_path) as dash:
+        host, port = dash.url[len("http://") :].rsplit(":", 1)
+        reader, writer = await asyncio.open_connection(host, int(port), limit=4096)
+        sock = writer.get_extra_info("socket")
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        writer.write(
+            f"GET /ws HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+            "Connection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+            "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n".encode()
+        )
+        await reader.readuntil(b"\r\n\r\n")
+        text = b'{"id":1,"op":"state","board":"xy"}'
+        frame = bytes([0x81, 0x80 | len(text)]) + b"\0\0\0\0" + text  # masked with zeros
+        most = 0
+        for _ in range(200):
+            writer.write(frame * 200)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(writer.drain(), 0.05)
+            most = max(most, len(dash.web.control._tasks))
+        assert most <= MAX_PENDING + 1, most
+        assert await board_says(dash.ports["xy"], b"WY\n") == b"PC48 ver 3.00-4\n"
+        writer.transport.abort()
 
 
 # -- start-up -------------------------------------------------------------------------------------
