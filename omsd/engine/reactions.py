@@ -149,8 +149,11 @@ def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
 
 
 def on_aux_timer(ex: Executor, axis: Axis, t: float) -> None:
+    """The settling time after a move in power-automatic mode has run out: the output goes
+    back to its idle state, at rest or while position maintenance corrects (the hold's
+    corrections are no motion PA drives, and their end is no end of a move)."""
     axis.aux_timer = None
-    if axis.pa is not None and axis.motion is Motion.IDLE:
+    if axis.pa is not None and axis.motion in (Motion.IDLE, Motion.HOLD):
         axis.aux = not axis.pa
     axis.invalidate()
 

@@ -123,3 +123,29 @@ def test_older_boards_power_automatic_is_for_go_and_gd_only(model: str) -> None:
     h.send("ST MR1000 GO ")  # the stop takes 0.01 s, the move 0.11 s
     h.until(0.55)
     assert h.axis("X").moving and h.axis("X").aux
+
+
+@pytest.mark.parametrize(("model", "sep"), [("PC48-4E", " "), ("PCIX-040", ";")])
+def test_power_automatic_settles_off_while_position_maintenance_corrects(
+    model: str, sep: str
+) -> None:
+    """PC48 §6.6 SE: "a settling time, in milliseconds, to be used before the power is
+    reduced, when using the PA mode"; PA: "off at the end of that move". The hold's own
+    corrections (HN) are no motion PA drives: without SE the output goes idle as the move ends
+    and stays so through a correction. With SE, a correction still running when the settling
+    time ran out kept the output in its moving state for good (``aux`` on at 3 s, the axis at
+    rest): the end of a correction is no end of a move, so nothing turned it back."""
+    h = Harness(model)
+    h.send(sep.join(["AX", "PA", "SE200", "HV1000", "HG10", "HD0", "HN", "VL10000", "AC100000"]))
+    h.send(sep)
+    h.run()
+    assert not h.axis("X").aux  # PA: the idle state
+    h.send(sep.join(["MR1000", "GO"]) + sep)
+    h.until(0.05)
+    assert h.axis("X").aux  # moving: "on"
+    h.board.inject_slip("X", 50, h.t)  # the encoder is 50 ahead: a correction follows the move
+    h.until(0.3)
+    assert h.axis("X").motion.name == "HOLD"  # correcting, within the settling time
+    h.until(3.0)
+    x = h.axis("X")
+    assert not x.moving and not x.aux  # power reduced once the settling time is over
