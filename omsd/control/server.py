@@ -485,7 +485,7 @@ class ControlServer:
 
     async def _wait(self, service: BoardService, m: dict[str, Any]) -> Any:
         until = m.get("until")
-        timeout = float(m.get("timeout", DEFAULT_WAIT))
+        timeout = _number(m, "timeout") if "timeout" in m else DEFAULT_WAIT
         if not 0.0 <= timeout <= MAX_WAIT:
             raise ControlError(f"timeout: expected 0 to {MAX_WAIT} s, got {timeout}")
         # the board run to now first: the condition reads where the axis is and where its

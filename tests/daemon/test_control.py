@@ -862,6 +862,9 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
                 12,
                 "direction",
             ),
+            # nor is it a wait's timeout, nor is a string: they waited 1 s and 0.01 s
+            (b'{"id":13,"op":"wait","until":"done","axis":"X","timeout":true}\n', 13, "timeout"),
+            (b'{"id":14,"op":"wait","until":"done","axis":"X","timeout":"0.01"}\n', 14, "timeout"),
         ]:
             reply = raw_request(s, reader, line)
             assert reply["id"] == ident and reply["ok"] is False, reply
