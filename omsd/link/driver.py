@@ -212,6 +212,7 @@ class DriverLink:
         self._echoing.discard(session)
         for key in [k for k in self._unclaimed if k[1] == session]:
             del self._unclaimed[key]
+        self._limit_marked_at.pop(session, None)
         return dropped
 
     def reset_input(self) -> int:

@@ -178,6 +178,10 @@ def test_limits_on_one_sample_of_two_sessions_each_give_their_session_an_at_sign
     read(1.0)
     assert got == {1: b"@\n", 2: b"@\n501\n"}
     assert link.held() is None
+    # what the link keeps of a session's limits goes with the session
+    assert link._limit_marked_at.keys() == {1, 2}
+    link.drop_input(1)
+    assert link._limit_marked_at.keys() == {2}
 
 
 def test_markers_wait_for_the_end_of_a_reply() -> None:
