@@ -48,7 +48,8 @@ never read the answers had every line it sent made a task at once: 1.6 GB in 15 
 
 MAX_WAITS = 256
 """``wait`` operations in progress at once, of all the connections of one control server (the
-socket's, the dashboard's, the MQTT bridge's); one more is refused. Each wakes at every change
+socket's; the dashboard and the MQTT bridge have one each, with a bound of their own); one more
+is refused. Each wakes at every change
 of its board: 20,000 of them, sent in one go, took the daemon's whole CPU, every board stopped
 answering and SIGTERM went unheard."""
 
