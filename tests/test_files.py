@@ -202,3 +202,81 @@ def test_what_ap_saves_always_fits(model: str) -> None:
     assert flash.apply(h.board, flash.board_parameters(h.board)) == []
     h.send("AX;HV5000;HG2;UU2.5;BC3;SE10;AY;SVI;")
     assert flash.apply(h.board, flash.board_parameters(h.board)) == []
+    h.send("AX;UF;JF0.5;")  # a velocity below VL's "1 ≤ VL" (?VL: vl0), which AP saves
+    assert flash.apply(h.board, flash.board_parameters(h.board)) == []
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "problem"),
+    [
+        # AC: "must be greater than zero (zero is not valid)", "RANGE: 1 ≤ AC ≤ 8,000,000"
+        (("AC",), 0, "axes.X.AC: expected 1 ≤ acceleration ≤ 8000000, got 0"),
+        # json.loads reads 1e400 as infinity: a number, but no acceleration
+        (("AC",), 1e400, "axes.X.AC: expected 1 ≤ acceleration ≤ 8000000, got inf"),
+        # VL: "RANGE: 1 ≤ VL ≤ 1044000" (a JF fraction below 1 is what AP may save)
+        (("VL",), 0, "axes.X.VL: expected 0 < velocity ≤ 1044000, got 0"),
+        (("VL",), 2e6, "axes.X.VL: expected 0 < velocity ≤ 1044000, got 2000000.0"),
+        (("ES",), 0, "axes.X.ES: expected 0 < slip tolerance ≤ 65535, got 0"),
+        (("HG",), 1e400, "axes.X.HG: expected 1 ≤ hold gain ≤ 32000, got inf"),
+        (("HV",), 2e6, "axes.X.HV: expected 0 or 1 ≤ hold velocity ≤ 1039999, got 2000000.0"),
+        (("ER",), 1e400, "axes.X.ER: expected a number > 0, got inf"),
+        # UU: the UU command's own range (greater than zero, at most 1,000,000,000)
+        (("UU",), "0", "axes.X.UU: expected 0 < multiplier ≤ 1000000000, got '0'"),
+        (("UU",), "-5", "axes.X.UU: expected 0 < multiplier ≤ 1000000000, got '-5'"),
+        (("UU",), "NaN", "axes.X.UU: expected 0 < multiplier ≤ 1000000000, got 'NaN'"),
+        (("UU",), "Infinity", "axes.X.UU: expected 0 < multiplier ≤ 1000000000, got 'Infinity'"),
+    ],
+)
+def test_a_saved_value_out_of_range_is_skipped(
+    where: tuple[str, ...], value: object, problem: str
+) -> None:
+    """Saved values out of the command's own range are skipped as those of the wrong type are
+    (docs/decisions.md: "a number out of range ... skipped one by one, the factory value
+    staying"); before, anything >= 0 was taken, and AC0, UU "0", "NaN" or "Infinity" (or a
+    1e400, which JSON reads as infinity) left a board that raised on its next move or query."""
+    h = Harness("PCIX-040")
+    saved = flash.board_parameters(h.board)
+    saved["axes"]["X"][where[0]] = value
+    assert flash.apply(h.board, saved) == [problem]
+    factory = Harness("PCIX-040")
+    x = h.board.axes[0]
+    key = {"AC": "ac", "VL": "vl", "ES": "es", "HG": "hg", "HV": "hv", "ER": "ratio", "UU": "uu"}
+    assert getattr(x, key[where[0]]) == getattr(factory.board.axes[0], key[where[0]])
+    h.send("AX;?VL;?UU;MR1000;GO;")
+    h.advance(1)
+    assert h.send("AX;RP;") == b"1000\n\r"
+
+
+def test_a_servo_gain_out_of_range_is_skipped() -> None:
+    """The gains' own ranges (KB: "0 ≤ KB ≤ 10", KP "0.00 ≤ KP ≤ 32767.00")."""
+    h = Harness("PCIX-400")
+    saved = flash.board_parameters(h.board)
+    saved["axes"]["X"]["servo"]["kb"] = 11
+    saved["axes"]["X"]["servo"]["kp"] = 1e400
+    saved["axes"]["X"]["servo"]["kd"] = 30
+    assert flash.apply(h.board, saved) == [
+        "axes.X.servo.kp: expected 0 ≤ coefficient ≤ 32767, got inf",
+        "axes.X.servo.kb: expected 0 ≤ coefficient ≤ 10, got 11",
+    ]
+    gains = h.board.axes[0].servo.gains  # type: ignore[union-attr]
+    assert (gains.kp, gains.kb, gains.kd) == (10.0, 10.0, 30.0)
+
+
+def test_a_saved_uu1_is_user_units_off() -> None:
+    """UU1 is "equivalent to" UF (the UF page: "equivalent to and preferred over UU1;"), as the
+    UU command makes it: a saved "1" answers ?UU with uf."""
+    h = Harness("PCIX-040")
+    saved = flash.board_parameters(h.board)
+    saved["axes"]["X"]["UU"] = "1"
+    assert flash.apply(h.board, saved) == []
+    assert h.send("AX;?UU;") == b"uf\n\r"
+
+
+def test_a_negative_backlash_is_skipped_on_a_stepper() -> None:
+    """BC: "0 ≤ BACKLASH ≤ +50 STEPPERS", "-50 ≤ BACKLASH ≤ +50 SERVOS"."""
+    h = Harness("PCIX-202")  # X, Y servo; Z, T open loop
+    saved = flash.board_parameters(h.board)
+    saved["axes"]["X"]["BC"] = -5
+    saved["axes"]["Z"]["BC"] = -5
+    assert flash.apply(h.board, saved) == ["axes.Z.BC: expected an integer 0..50, got -5"]
+    assert [a.backlash for a in h.board.axes[::2]] == [-5, 0]

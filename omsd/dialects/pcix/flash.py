@@ -14,10 +14,12 @@ The saved set is a JSON object (``omsd.statefile.BoardFlash.defaults``)::
     {"axes": {"X": {"VL": 200000.0, "AC": ..., "servo": {"kp": 10.0, ...}, ...}, ...},
      "tables": {"2": [[0.1, 0.2], ...]}, "scurves": {"1": [...]}}
 
-Values that do not fit (a hand-edited file: the wrong type, out of range) are skipped one by
-one: the factory value stays, and :func:`apply` returns where each was (``axes.X.VL: expected a
-number >= 0, got a string``) for the daemon to report in one warning line. Keys it does not know
-are left alone.
+Values that do not fit (a hand-edited file: the wrong type, out of the command's own range in
+:mod:`omsd.dialects.pcix.ranges`, or not finite: JSON reads ``1e400`` as infinity) are
+skipped one by one: the factory value stays, and :func:`apply` returns where each was
+(``axes.X.VL: expected a number >= 0, got a string``, ``axes.X.AC: expected 1 ≤ acceleration ≤
+8000000, got 0``) for the daemon to report in one warning line. Keys it does not know are left
+alone.
 """
 
 from __future__ import annotations
@@ -27,10 +29,12 @@ from dataclasses import asdict, fields, replace
 from decimal import Decimal, InvalidOperation
 from typing import Any
 
+from omsd.dialects.pcix.ranges import PCIX_RANGES
 from omsd.engine import profiles as pf
 from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.servo import ServoGains
+from omsd.protocol.ranges import OperandRange
 
 _GAIN_NAMES = tuple(f.name for f in fields(ServoGains))
 
@@ -95,35 +99,59 @@ def _kind(value: object) -> str:
     return "an array" if isinstance(value, list) else "an object"
 
 
+def _row(board: Core, mnemonic: str) -> OperandRange:
+    return PCIX_RANGES.lookup(mnemonic, 1, board.model.family)
+
+
+def _fits(board: Core, mnemonic: str, value: float | Decimal) -> bool:
+    """Whether a saved value is one the command could have set: its range row, except where
+    AP saves what the row does not hold. VL: a JF below 1 ("JF0.5": VL 0.5) is saved, so any
+    velocity above zero; HV: 0 is the factory "no hold velocity" ("The factory default setting
+    is zero"), below the row's 1."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return False
+    if mnemonic == "VL":
+        high = _row(board, "VL").edges(len(board.axes))[1]
+        return high is not None and 0 < value <= high
+    if mnemonic == "HV" and value == 0:
+        return True
+    return _row(board, mnemonic).contains(value, len(board.axes))
+
+
+def _describe(board: Core, mnemonic: str) -> str:
+    """The range a saved value must be in, for a problem's text."""
+    text = _row(board, mnemonic).describe(len(board.axes))
+    if mnemonic == "VL":
+        return "0 < " + text.split(" ≤ ", 1)[1]
+    return "0 or " + text if mnemonic == "HV" else text
+
+
 def _apply_axis(axis: Axis, p: dict[str, Any], board: Core, at: str, problems: list[str]) -> None:
     def bad(key: str, expected: str) -> None:
         problems.append(f"{at}.{key}: expected {expected}, got {_kind(p[key])}")
 
-    # HV 0 is the factory "no hold velocity" (executor: no hold correction without one)
-    for key, attr in (
-        ("AC", "ac"),
-        ("VL", "vl"),
-        ("VB", "vb"),
-        ("ES", "es"),
-        ("HD", "hd"),
-        ("HV", "hv"),
-    ):
-        v = _number(p.get(key))
-        if v is not None and v >= 0:
+    numbers = (("AC", "ac"), ("VL", "vl"), ("VB", "vb"), ("ES", "es"), ("HD", "hd"))
+    for key, attr in (*numbers, ("HG", "hg"), ("HV", "hv")):
+        if key not in p:
+            continue
+        v = _number(p[key])
+        if v is None:
+            bad(key, "a number > 0" if key == "HG" else "a number >= 0")
+        elif _fits(board, key, v):
             setattr(axis, attr, v)
-        elif key in p:
-            bad(key, "a number >= 0")
-    for key, attr in (("HG", "hg"), ("ER", "ratio")):
-        v = _number(p.get(key))
-        if v is not None and v > 0:
-            setattr(axis, attr, v)
-        elif key in p:
-            bad(key, "a number > 0")
+        else:
+            problems.append(f"{at}.{key}: expected {_describe(board, key)}, got {_kind(p[key])}")
+    v = _number(p.get("ER"))
+    if v is not None and 0 < v < math.inf:
+        axis.ratio = v
+    elif "ER" in p:
+        bad("ER", "a number > 0")
     bc = p.get("BC")
-    if isinstance(bc, int) and not isinstance(bc, bool) and -50 <= bc <= 50:
+    low = -50 if axis.servo is not None else 0  # "0 ≤ BACKLASH ≤ +50 STEPPERS", "-50 ... SERVOS"
+    if isinstance(bc, int) and not isinstance(bc, bool) and low <= bc <= 50:
         axis.backlash = bc
     elif "BC" in p:
-        bad("BC", "an integer -50..50")
+        bad("BC", f"an integer {low}..50")
     for key, attr in (
         ("home_high", "home_high"),
         ("limit_high", "limit_high"),
@@ -150,9 +178,14 @@ def _apply_axis(axis: Axis, p: dict[str, Any], board: Core, at: str, problems: l
         axis.uu = None
     elif isinstance(uu, str):
         try:
-            axis.uu = Decimal(uu)
+            multiplier = Decimal(uu)
         except InvalidOperation:
             bad("UU", "a decimal number in a string or null")
+        else:
+            if multiplier.is_finite() and _fits(board, "UU", multiplier):
+                axis.uu = None if multiplier == 1 else multiplier  # UU1 is UF, as the command
+            else:
+                bad("UU", _describe(board, "UU"))
     else:
         bad("UU", "a decimal number in a string or null")
     ramp = p.get("ramp")
@@ -170,8 +203,11 @@ def _apply_axis(axis: Axis, p: dict[str, Any], board: Core, at: str, problems: l
             flag = name in ("bipolar", "inverted")
             if flag and isinstance(value, bool):
                 known[name] = value
-            elif not flag and _number(value) is not None and math.isfinite(value):
+            elif not flag and _number(value) is not None and _fits(board, name.upper(), value):
                 known[name] = float(value)
+            elif not flag and _number(value) is not None:
+                what = _describe(board, name.upper())
+                problems.append(f"{at}.servo.{name}: expected {what}, got {_kind(value)}")
             else:
                 what = "true or false" if flag else "a number"
                 problems.append(f"{at}.servo.{name}: expected {what}, got {_kind(value)}")
