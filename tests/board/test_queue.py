@@ -613,6 +613,35 @@ def test_wq_holds_the_interpreter_until_the_queue_is_empty() -> None:
     assert h.run() == value("1000")
 
 
+def test_wq_waits_for_the_queues_of_the_current_mode() -> None:
+    """§6.12 WQ: "until the queue for the current axis mode is empty, i.e. all previous moves
+    have finished". In single-axis mode the current axis only (Y's WQ does not wait for X's
+    WT); in AA and in AM every axis (an AM WQ waits for another task's axis too: "all previous
+    moves"), docs/decisions.md, Synchronisation."""
+    h = Harness("PC48-4")
+    assert h.send("AX WT1000 AY WQ RQ") == value("200")
+    for mode in ("AA", "AM"):
+        h = Harness("PC48-4")
+        assert h.send(f"AY WT1000 {mode} MR100; GO WQ WY") == b""
+        assert h.advance(0.9) == b""
+        assert h.advance(0.2) == b"\n\rPC48 ver 3.00-4\n\r"
+
+
+def test_queued_cn_acts_when_reached_and_immediate_pf_when_read() -> None:
+    """CN is queued (§6.5: "AX - AS 1"), PF and PN immediate: each acts at its own time. Typed
+    behind a busy axis, `CN PF` leaves the ramp linear while CN waits, and the CN then makes
+    the move that follows cosine; the slot column a command is charged is the ramp in force
+    when it is read (AC after the waiting CN: linear, 4). docs/decisions.md, Queue tables."""
+    h = Harness("PC48-4")
+    h.send("AX WT1000 CN AC100")
+    assert rq(h) == [200 - 3 - 1 - 4]
+    h = Harness("PC48-4")
+    h.send("AX VL1000 AC1000 WT1000 CN PF MR1000 GO")
+    assert h.axis("X").ramp.kind.value == "linear"
+    h.advance(1.5)
+    assert h.axis("X").ramp.kind.value == "cosine"
+
+
 def test_wq_is_not_valid_in_a_loop() -> None:
     h = Harness("PC48-4")
     h.send("AX LS2 WQ")
