@@ -26,6 +26,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from ipv6 import needs_loopback
 
 from omsd.control.client import Control
 from omsd.testing import Omsd, OmsdBoards, _Plan, _toml_value
@@ -394,18 +395,7 @@ def test_a_daemon_not_ready_in_time_is_killed(tmp_path: Path) -> None:
     assert problems == []
 
 
-def _ipv6_loopback() -> bool:
-    import socket
-
-    try:
-        with socket.socket(socket.AF_INET6) as s:
-            s.bind(("::1", 0))
-    except OSError:
-        return False
-    return True
-
-
-@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback here")
+@needs_loopback
 def test_serial_reaches_a_board_served_on_ipv6(tmp_path: Path) -> None:
     """``serial()`` on a board served on [::1] opened ``socket://::1:PORT``, a URL with no
     host pyserial can read; it is ``socket://[::1]:PORT`` (RFC 3986 §3.2.2)."""

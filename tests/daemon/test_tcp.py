@@ -16,8 +16,8 @@ import socket
 import time
 from pathlib import Path
 
-import pytest
 import serial
+from ipv6 import needs_loopback
 
 from .process import POLL, TIMEOUT, Conn, Omsd, run_omsd, wait_for
 
@@ -276,16 +276,7 @@ def test_more_than_the_driver_buffer_at_once_is_passed_on_exactly_once(omsd: Oms
         assert c.quiet(0.1) == b""
 
 
-def _ipv6_loopback() -> bool:
-    try:
-        with socket.socket(socket.AF_INET6) as s:
-            s.bind(("::1", 0))
-    except OSError:
-        return False
-    return True
-
-
-@pytest.mark.skipif(not _ipv6_loopback(), reason="no IPv6 loopback here")
+@needs_loopback
 def test_ipv6_addresses_are_printed_in_brackets_everywhere(omsd: Omsd, tmp_path: Path) -> None:
     """An IPv6 address with its port is written [::1]:PORT (RFC 3986 §3.2.2), as omsd's own
     --tcp, [control] tcp and omsd ctl --tcp take it: the endpoint lines printed ::1:PORT,
