@@ -170,13 +170,15 @@ class Core:
         if self.flash_writer is not None:
             self.flash_writer(self.flash_defaults, dict(self.flash_macros))
 
-    def unsettle(self) -> None:
+    def unsettle(self, outside: bool = True) -> None:
         """Something may have changed that no settle has seen yet: the machine is no longer
         at rest (``settled``), what a report said may no longer hold (``rest_epoch``), nor
-        when the board must next be run (``wakeup_stale``)."""
+        when the board must next be run (``wakeup_stale``); ``outside``: changed from outside,
+        not by the machine going its own way (``outside_epoch``)."""
         self.settled = False
         self.rest_epoch += 1
-        self.outside_epoch += 1
+        if outside:
+            self.outside_epoch += 1
         self.wakeup_stale = True
 
     # -- output -------------------------------------------------------------------------------

@@ -280,14 +280,9 @@ class Machine(Core):
         front = self.front
         skip_idle = self.fast_paths
         codes = self._follow_on_codes
-        if self.after_events:
-            # the settle after an instant's events, Machine.advance's own: what changes is the
-            # machine going its own way, not a change from outside (outside_epoch)
-            self.settled = False
-            self.rest_epoch += 1
-            self.wakeup_stale = True
-        else:
-            self.unsettle()
+        # (the settle after an instant's events, Machine.advance's own, is the machine going
+        # its own way, not a change from outside)
+        self.unsettle(outside=not self.after_events)
         for _ in range(10_000):
             progressed = False
             for axis in self.axes:

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 import serial
@@ -67,6 +68,20 @@ def test_ctrl_c_while_the_configuration_is_read_is_status_130(
     assert (out, err) == ("", "")
 
 
+def _start(tmp_path: Path, *args: str, **popen: Any) -> subprocess.Popen[bytes]:
+    """``python -m omsd ARGS --control off`` with its own runtime directory, its output piped:
+    for the tests that signal omsd before it has announced anything (``omsd`` fixture's
+    daemons are waited for until they have)."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "omsd", *args, "--control", "off"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env={**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)},
+        **popen,
+    )
+
+
 def _default_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
@@ -92,14 +107,10 @@ def _signal_while_reading_a_fifo(tmp_path: Path, sig: signal.Signals) -> tuple[i
     runs"). That is CPython's signal handling, not omsd's, and no writer is needed here."""
     fifo = tmp_path / "omsd.toml"
     os.mkfifo(fifo)
-    command = [sys.executable, "-m", "omsd", "--config", str(fifo), "--control", "off"]
-    env = {**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)}
-    process = subprocess.Popen(
-        command,
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        env=env,
+    process = _start(
+        tmp_path,
+        "--config",
+        str(fifo),
         # Ctrl-C as a terminal delivers it: a test run started in the background by a shell
         # without job control (a CI runner's, `pytest &`) ignores SIGINT, and so would omsd,
         # which Python starts with the disposition it inherits
@@ -145,17 +156,9 @@ def test_sigterm_the_moment_omsd_exists_is_a_clean_stop(tmp_path: Path) -> None:
     start it, and it is delivered the moment omsd unblocks it. omsd installs its handler, then
     unblocks SIGINT and SIGTERM, first thing: status 0, nothing printed. Before, the signal
     stayed blocked for ever and the daemon served on (this test timed out)."""
-    env = {**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)}
-    command = [sys.executable, "-m", "omsd", "--tcp", "127.0.0.1:0", "--control", "off"]
     blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
     try:
-        process = subprocess.Popen(
-            command,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            env=env,
-        )
+        process = _start(tmp_path, "--tcp", "127.0.0.1:0")
         process.send_signal(signal.SIGTERM)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
