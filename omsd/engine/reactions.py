@@ -150,10 +150,13 @@ def _limit(ex: Executor, axis: Axis, direction: int, t: float) -> None:
 
 def on_aux_timer(ex: Executor, axis: Axis, t: float) -> None:
     """The settling time after a move in power-automatic mode has run out: the output goes
-    back to its idle state, at rest or while position maintenance corrects (the hold's
-    corrections are no motion PA drives, and their end is no end of a move)."""
+    back to its idle state ("a settling time ... to be used before the power is reduced", PC48
+    §6.6 SE), whatever the axis does now. A motion PA drives that began since has cancelled the
+    timer (:meth:`Executor.power_on`); any other (the hold's corrections, the PC48's jogs and
+    home searches, the PCIx's streams) is no motion PA drives, and its end is no end of a move:
+    the output went on waiting for it until 2026-11-27."""
     axis.aux_timer = None
-    if axis.pa is not None and axis.motion in (Motion.IDLE, Motion.HOLD):
+    if axis.pa is not None:
         axis.aux = not axis.pa
     axis.invalidate()
 
