@@ -82,8 +82,15 @@ def _slip_seen(axis: Axis, t: float) -> float:
 
 
 def _look_for_home(axis: Axis, t: float) -> None:
+    """Home is met on the search's own way: HM "will cause the current axis to step in the
+    positive direction at the predefined velocity, until the home input line goes true" (PC48
+    §6.11; HR "exactly like the HM command, except it travels in the reverse direction"). A
+    search that begins while the axis still moves the other way (out of a jog or a move) takes
+    no home on its way back: an edge met then is the switch's far side, where a search from rest
+    never loads the counter."""
     home = axis.home
     assert home is not None
+    on_its_way = axis.direction_at(t) == home.direction
     if home.index_points:
         before, now = axis.home_last_phys, axis.phys(t)
         axis.home_last_phys = now
@@ -93,7 +100,7 @@ def _look_for_home(axis: Axis, t: float) -> None:
         cond = axis.home_sensed(t)
         found = cond and not home.prev
         home.prev = cond
-    if not found:
+    if not found or not on_its_way:
         return
     axis.home = None
     if home.kill:

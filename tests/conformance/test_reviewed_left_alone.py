@@ -6,6 +6,13 @@ where the manual's words found omsd wrong.
   command execution") reduces the power then: SE is "a settling time, in milliseconds, to be
   used before the power is reduced, when using the PA mode" (PC48 §6.6). Before, the output
   stayed in its moving state until that jog or search ended.
+* A home search begun while the axis still moves the other way (HM reached while a JG-
+  runs, the jog letting its queue go on once up to speed) takes no home until it travels its
+  own way: HM "will cause the current axis to step in the positive direction at the predefined
+  velocity, until the home input line goes true" (PC48 §6.11; PCIx HM "move in the positive
+  direction ... until the home is detected"; HR "exactly like the HM command, except it travels
+  in the reverse direction"). Before, the switch's far edge, met while reversing out of the jog,
+  counted as home and the counter was loaded about a switch width off.
 """
 
 from __future__ import annotations
@@ -42,3 +49,37 @@ def test_settling_time_reduces_the_power_during_a_motion_pa_does_not_drive(
     h.until(0.6)
     assert x.moving and x.motion.name in ("JOG", "HOME")
     assert not x.aux  # power reduced once the settling time is over
+
+
+@pytest.mark.parametrize(
+    ("model", "sep", "jog", "search"),
+    [
+        ("PC48-4", " ", "JG-5000", "HM"),
+        ("PCIX-400", ";", "JG-5000", "HM"),
+        ("PC48-4", " ", "JG5000", "HR"),
+        ("PCIX-040", ";", "JG5000", "HR"),
+    ],
+)
+def test_a_home_search_reversing_out_of_a_jog_takes_home_on_its_own_way(
+    model: str, sep: str, jog: str, search: str
+) -> None:
+    """The switch at 1000..1100, the carriage 2000 steps beyond it on the side the jog comes
+    from. ``AX AC10000 VL2000 JG-5000 HM MA0 GO``: the jog is up to speed at 0.5 s, HM turns it
+    round at AC through the switch (moving negative) and back (moving positive). Home is where
+    the search meets the switch on its own way, as a search from rest does: ``MA0 GO`` ends at
+    the same edge as after a search from rest (1000.2 for HM, 1098.4 for HR: the switch's side
+    the search comes from). Before, HM took the edge at 1100 met on the way down: ``RP`` after
+    the search answered -597 (now 500), MA0 GO ended at 1097.6 (now 1000.6); HR took the one at
+    1000 (RP 599, now -502; MA0 GO at 1000.8, now 1097.9)."""
+    start, rest = (3000.0, 0.0) if search == "HM" else (-900.0, 2000.0)
+
+    def home_after(commands: list[str], position: float) -> float:
+        h = Harness(model, world={"X": AxisWorld(start_position=position)})
+        h.send(sep.join(["AX", "AC10000", "VL2000", *commands, search, "MA0", "GO", ""]))
+        h.run()
+        assert h.errors() == []
+        return h.axis("X").carriage(h.t)
+
+    from_rest = home_after([], rest)
+    assert abs(from_rest - 1050.0) > 40.0  # (an edge of the switch, 1000..1100)
+    assert home_after([jog], start) == pytest.approx(from_rest, abs=1.0)
