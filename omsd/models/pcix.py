@@ -28,12 +28,20 @@ How the tables are read
   reduced depends on the distance and on the AC/VL in force when the move runs, which may still
   be waiting in the queue when the command is parsed, so the 11/44 are charged on every move made
   with those ramps (the manual: "The queue requirements shown in the tables are typical").
+* ML/MT's rows for an axis that is not the master ("If this is not the master axis, then the
+  acceleration and velocity values will be modified, and the following queue requirements will
+  be added": ML linear 6, parabolic 20, cosine 20, custom "6 + (2 x number of ramp segments)",
+  S-curve 113; MT 6, 26, 26, the same, 113) are ``CommandSpec.follower``, charged when the
+  command is read on every axis of the move but the master, as the registers and positions then
+  foretell it (the master is the axis with the longest move time; an axis left where it is is
+  not modified). Until 2026-11-27 they were not charged (RQ showed the master's 4 on every axis).
+  The master's own row ("If this is the master axis for this move and its acceleration and
+  velocity values need to be reset ... because a previous move altered them") prints no numbers
+  of its own, and omsd gives the values back as each linear move starts: not charged.
 * Not charged: the "Ramp add-ons" that MA, MR and JG need only "because the last move just prior
-  to this move was either a MT or ML move", and the ML/MT rows "If this is (not) the master axis
-  … the following queue requirements will be added". Both depend on the previous move or on which
-  axis turns out to be the master, known only at execution; the manual calls its numbers
-  "typical" and "Depending on the circumstances … the actual queue requirement may vary
-  slightly", so the table keeps the unconditional part.
+  to this move was either a MT or ML move": they depend on the previous move; the manual calls
+  its numbers "typical" and "Depending on the circumstances … the actual queue requirement may
+  vary slightly", so the table keeps the unconditional part.
 * CX and CG: their "ADDITIONAL QUEUE REQUIREMENTS" by ramp type ("Add the following queue
   requirements for the ramp types listed") are unconditional and are charged: CG "Linear ( PF,
   LA ) 8", CX has no linear row (0). Custom "6 + (2 x number of ramp segments)".
@@ -418,11 +426,18 @@ PCIX_COMMANDS: dict[str, CommandSpec] = {
         # 5.9.2 move specification
         # MA: "If the axis is a stepper encoder or servo axis add 2 to the command"
         _c("MA", True, _move(2) + addons(encoder=2), _move(4) + addons(encoder=2)),
-        _c("ML", True, NV, _move(4)),
+        _c("ML", True, NV, _move(4), follower=qr(6, 20, 20, 6, 113) + addons(segments=2)),
         # MR: "If the axis is a stepper encoder or servo axis add 1 to both the command"
         _c("MR", True, _move(2) + addons(encoder=1), _move(2) + addons(encoder=1)),
         # MT in a contour: "6 + (number of axes included in contour definition)"
-        _c("MT", True, NV, _move(4), per_axis(6, 1)),
+        _c(
+            "MT",
+            True,
+            NV,
+            _move(4),
+            per_axis(6, 1),
+            follower=qr(6, 26, 26, 6, 113) + addons(segments=2),
+        ),
         # 5.9.3 move execution
         _c("GD", False, q(6) + _GO, q(8) + _GO),
         _c("GN", False, q(6) + _GO, q(7) + _GO),

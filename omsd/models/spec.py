@@ -150,6 +150,9 @@ class CommandSpec:
     # the prose): None = every axis; "servo" = servo axes; "feedback" = servo or stepper with
     # encoder; "stepper_encoder" = stepper with encoder only; "open_loop" = open-loop stepper only
     motor: str | None = None
+    # PCIx ML/MT: "If this is not the master axis, then the acceleration and velocity values will
+    # be modified, and the following queue requirements will be added" (by the axis's ramp type)
+    follower: Cell | None = None
 
     def cell(self, mode: str) -> Cell:
         if mode == "single":

@@ -13,6 +13,10 @@ where the manual's words found omsd wrong.
   direction ... until the home is detected"; HR "exactly like the HM command, except it travels
   in the reverse direction"). Before, the switch's far edge, met while reversing out of the jog,
   counted as home and the counter was loaded about a switch width off.
+* The PCIx's ML and MT charge their rows for the axes that are not the master: "If this is not
+  the master axis, then the acceleration and velocity values will be modified, and the following
+  queue requirements will be added" (ML: linear 6, parabolic 20 ...; MT: linear 6, parabolic 26
+  ...). RQ showed ML's and MT's 4 on every axis of the move.
 """
 
 from __future__ import annotations
@@ -83,3 +87,30 @@ def test_a_home_search_reversing_out_of_a_jog_takes_home_on_its_own_way(
     from_rest = home_after([], rest)
     assert abs(from_rest - 1050.0) > 40.0  # (an edge of the switch, 1000..1100)
     assert home_after([jog], start) == pytest.approx(from_rest, abs=1.0)
+
+
+@pytest.mark.parametrize(
+    ("commands", "free"),
+    [
+        # X (10000 at the same VL and AC) is the master; Y, linear, adds 6
+        ("AA;WT1000;ML10000,5000;", "793, 787, 797, 797"),
+        # Y (5000) is the master now; X adds 6
+        ("AA;WT1000;ML1000,5000;", "787, 793, 797, 797"),
+        # X at VL1000 is the master; Y, parabolic (PR5), adds MT's 26 to MT's 4
+        ("AA;VL1000,100000;AY;PR5;AA;WT1000;MT2000,10000;", "793, 767, 797, 797"),
+        # an axis the move leaves where it is is not modified: nothing added
+        ("AA;WT1000;ML0,5000;", "793, 793, 797, 797"),
+    ],
+)
+def test_pcix_linear_moves_charge_the_rows_of_the_axes_other_than_the_master(
+    commands: str, free: str
+) -> None:
+    """ML: "All axes are scaled to the axis with the longest move time (the master axis)"; its
+    table "ML#,#,##; AA-AM 4*" and "If this is not the master axis, then the acceleration and
+    velocity values will be modified, and the following queue requirements will be added: ...
+    Linear ( PF , LA ) 6 ... All other Parabolic forms ( PN , PR ) 20"; MT's the same with
+    "All other Parabolic forms 26". The WT holds the queues (3 slots) so RQ sees the entries.
+    Before, every axis of the move showed 793."""
+    h = Harness("PCIX-004")
+    assert h.send(commands + "RQ;") == f"{free}\n\r".encode()
+    assert h.errors() == []

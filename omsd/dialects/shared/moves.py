@@ -91,16 +91,45 @@ def _move(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     else:
         items = dict(ix.per_axis(cmd))
     group = SyncGroup(set(items), barrier=False) if code in ("ML", "MT") else None
+    values = {index: _steps(ix, machine.axes[index], raw, code) for index, raw in items.items()}
+    follower = ix.commands[code].follower
+    followers = _followers(ix, code, values, t) if follower is not None else set()
     ops = []
-    for index, raw_value in items.items():
+    for index, value in values.items():
         axis = machine.axes[index]
-        value = _steps(ix, axis, raw_value, code)
-        ops.append((axis, Op(code, (value,), ix.cost(cell, axis), group)))
+        slots = ix.cost(cell, axis)
+        if follower is not None and index in followers:
+            slots += ix.cost(follower, axis)
+        ops.append((axis, Op(code, (value,), slots, group)))
     ix.enqueue(ops)
     if ix.mode != "single":
         ix.last_move = sorted(items)
     else:
         ix.last_move = [ix.axis_index]
+
+
+def _followers(ix: Interpreter, code: str, values: dict[int, float], t: float) -> set[int]:
+    """The axes of a linear move (ML, MT) other than its master, as the command is read: the
+    master is the axis with the longest move time at its own VL, AC, VB and ramp ("All axes are
+    scaled to the axis with the longest move time (the master axis)", as
+    ``Executor._interpolate`` picks it when the move starts), an MT's distance from where the
+    axis is now. An axis the move leaves where it is has nothing modified."""
+    distance: dict[int, float] = {}
+    for index, value in values.items():
+        axis = ix.machine.axes[index]
+        target = axis.to_motor(value)
+        d = abs(math.trunc(target) if code == "ML" else math.trunc(target) - axis.position(t))
+        if d > 0:
+            distance[index] = float(d)
+    if not distance:
+        return set()
+
+    def move_time(index: int) -> float:
+        a = ix.machine.axes[index]
+        return pf.move_time(distance[index], a.vl, a.ac, a.base_velocity, a.ramp)
+
+    master = max(sorted(distance), key=move_time)
+    return set(distance) - {master}
 
 
 @handles("RM")
