@@ -134,3 +134,44 @@ def test_pcix_has_no_echo_and_says_nothing_on_an_error() -> None:
     h = Harness("PCIX-400")
     assert h.send("EN;XQ;") == b""
     assert [k for k, _ in _errors(h)] == [ErrorKind.UNKNOWN_COMMAND] * 2
+
+
+@pytest.mark.parametrize(
+    ("line", "kinds"),
+    [
+        # the pages ask for their operands: "Two parameters must be supplied" (TL)
+        ("AX;TL5;", [ErrorKind.MISSING_PARAMETER]),
+        ("AX;ER2;", [ErrorKind.MISSING_PARAMETER]),
+        ("AX;MV100;", [ErrorKind.MISSING_PARAMETER]),
+        # AJ: "from 2 to 7 parameters", but every one after the number bracketed with a default
+        ("AX;AJ1;", []),
+    ],
+)
+def test_pcix_too_few_operands(line: str, kinds: list[ErrorKind]) -> None:
+    """Pinned (``docs/decisions.md``, "PCIx AJ's omitted parameters"): too few operands is a
+    missing-parameter error where the page asks for them; ``AJ1;`` defines the all-default
+    profile, its page saying both "It can accept from 2 to 7 parameters" and "Parameters in
+    brackets [] are optional" with ALOWER's "Default value: 0.0"."""
+    h = Harness("PCIX-040")
+    h.send(line)
+    assert [k for k, _ in _errors(h)] == kinds
+    if not kinds:
+        assert h.send("?AJ1;") == b"1.0000000" + b",0.00000000" * 2 + b",1.00000000" + (
+            b",0.00000000" * 2 + b",1.00000000\n\r"
+        )
+
+
+def test_pcix_gu_after_an_ml() -> None:
+    """Pinned (``docs/decisions.md``, "GU after an ML or MT"): GU is "not valid with the ML and
+    MT commands" and "AA-AM Not Valid": typed in AA, a command error; after ``AX;`` it runs X's
+    part of the move alone and Y's waits for a GO."""
+    h = Harness("PCIX-004")
+    h.send("AA;ML1000,500;GU;")
+    assert [k for k, _ in _errors(h)] == [ErrorKind.NOT_VALID_IN_MODE]
+    h.send("AX;GU;")
+    h.run()
+    assert _errors(h) == []
+    assert h.send("AA;RP;") == b"1000,0,0,0\n\r"
+    h.send("GO;")
+    h.run()
+    assert h.send("AA;RP;") == b"1000,500,0,0\n\r"
