@@ -108,11 +108,16 @@ def _look_for_home(axis: Axis, t: float) -> None:
         if axis.hold:  # (hold kept through it) what is held is where the pulses stopped
             axis.hold_goal = axis.tracked_encoder(axis.position(t))
         return
-    axis.load_counter(t, home.position)
+    # the parameter is in encoder counts under ER ("All distance ... parameters are input in
+    # encoder counts", PC48 §6.15), so the counter gets it over the ratio in whole steps, as LP
+    # loads it: HM's "move absolute to the same position as specified in the HM command" then
+    # returns home
+    axis.load_counter(t, float(math.trunc(axis.to_motor(home.position))))
     if axis.has_encoder and axis.servo is None and axis.host.options.home_loads_encoder:
         # PCIx HM: "position counters will be initialized"; HR, which "behaves exactly like the
         # HM command": "the position and encoder counters are loaded with the parameter(s)" (a
-        # servo axis's encoder is its loop's, which follows the counter)
+        # servo axis's encoder is its loop's, which follows the counter); the encoder the
+        # parameter itself, as LP's
         axis.anchor_encoder(t, float(home.position))
     axis.anchor_tracking(t)
     axis.decelerate(t)

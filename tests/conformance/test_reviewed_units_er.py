@@ -1,0 +1,79 @@
+"""The encoder ratio (ER) and user units (UU), command by command, on the PC48 family (PC48
+000_438df88d2a6a1670.txt, VS4 003_c16e31315d499848.txt) and the PCIx (002_5f0bea9264c6d239.txt),
+found by the review of units under ER (docs/decisions.md, "What UU scales", "Open: the units of
+the queries under UU and ER").
+
+ER: "All distance, velocity and acceleration parameters are input in encoder counts when this
+mode is enabled. The correct number of motor counts are generated, while the user need only be
+concerned with encoder counts" (PC48 §6.15; the VS4's the same). omsd takes the PCIx's the same
+way.
+
+* HM and HR loaded the position counter with their parameter as motor steps under ER: after
+  ``ER2,1 VL1000 HM1000`` the counter read 1000 at home, so the page's ``MA1000`` "to the same
+  position as specified in the HM command" (1000 counts, 500 steps) stopped 500 steps short of
+  home. The counter now gets the parameter over the ratio, as LP's (and the PCIx's encoder the
+  parameter, as LP's: "the parameter will be loaded into the encoder position register and the
+  parameter times the encoder ratio will be loaded into the position counter").
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
+
+from .pcix import reply
+from .support import frame, number
+
+# -- HM, HR --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040"])
+def test_hm_then_ma_to_the_same_position_returns_home_under_a_ratio(model: str) -> None:
+    """HM: "The position counter will be initialized to the position supplied as a parameter
+    ... The axis may be commanded to go home by following this command with a move absolute to
+    the same position as specified in the HM command" (example ``AX VL1000 HM1000 MA1000 GO``),
+    and ER: "All distance ... parameters are input in encoder counts". Under ``ER2,1`` (two
+    counts a step) home at step 1000 is 1000 counts' worth of steps, 500, in the counter; MA1000
+    goes back to it (the carriage was left at step 500: the counter read 1000 at home). The
+    PC48's HM loads the counter alone, and the encoder went on counting: 2000 at home."""
+    h = Harness(model)  # home switch from step 1000 to 1100
+    h.send("AX ER2,1 VL1000 HM1000 MA1000 GO ")
+    h.run()
+    assert round(h.axis("X").phys(h.t)) == 1000  # (it was 500)
+    assert h.send("RP ") == frame("500")  # (500 too, but 500 steps from home)
+    assert number(h.send("RE ")) in (2000, 2001)  # the carriage at home (it was 1000)
+    assert h.errors() == []
+
+
+def test_pcix_home_loads_the_counter_over_the_ratio_and_the_encoder_with_the_parameter() -> None:
+    """The PCIx's HM "The position counters will be initialized to the positions supplied as
+    parameters"; HR "the position and encoder counters are loaded with the parameter(s)", LP's
+    words for the same pair of registers: "the parameter will be loaded into the encoder position
+    register and the parameter times the encoder ratio will be loaded into the position
+    counter". ``ER2,1;VL1000;HM1000;MA1000;GO;`` (the HM page's example under a ratio) ends at
+    home, RP 500, RE 1000 (it ended at step 500 with RP 500, RE 0: both registers had been
+    loaded with 1000, the counter as steps)."""
+    h = Harness("PCIX-040")
+    h.send("AX;ER2,1;VL1000;HM1000;MA1000;GO;")
+    h.run()
+    assert round(h.axis("X").phys(h.t)) == 1000  # (it was 500)
+    assert h.send("RP;RE;") == reply("500") + reply("1000")  # (it was 500, 0)
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "PCIX-040"])
+def test_hr_loads_the_counter_over_the_ratio(model: str) -> None:
+    """HR "behaves exactly like the HM command, except it travels in the reverse direction"
+    (PCIx; PC48 "find home in reverse direction and initialize position counter"): from step
+    2000 under ``ER1,2`` (a count every two steps) home (entered from above at the switch's top,
+    step 1099) loads -1000 counts, -2000 steps, and ``MA-1000`` returns there (the counter read
+    -1000 at home, and MA-1000, -2000 steps, went on down 1000 steps, to step 99)."""
+    h = Harness(model, world={"X": AxisWorld(start_position=2000.0)})
+    sep = ";" if model.startswith("PCIX") else " "
+    h.send(sep.join(["AX", "ER1,2", "VL1000", "HR-1000", "MA-1000", "GO", ""]))
+    h.run()
+    assert round(h.axis("X").phys(h.t)) == 1099  # (it was 99)
+    assert h.position("X") == -2000
+    assert h.errors() == []
