@@ -29,7 +29,7 @@ from .support import frame, number
 # -- HM, HR --------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040"])
+@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PC46-4E"])
 def test_hm_then_ma_to_the_same_position_returns_home_under_a_ratio(model: str) -> None:
     """HM: "The position counter will be initialized to the position supplied as a parameter
     ... The axis may be commanded to go home by following this command with a move absolute to
@@ -76,4 +76,69 @@ def test_hr_loads_the_counter_over_the_ratio(model: str) -> None:
     h.run()
     assert round(h.axis("X").phys(h.t)) == 1099  # (it was 99)
     assert h.position("X") == -2000
+    assert h.errors() == []
+
+
+# -- readings the manuals leave open, pinned (docs/decisions.md) ---------------------------------
+
+
+def test_parameter_queries_answer_in_motor_steps_under_uu_and_er() -> None:
+    """docs/decisions.md, "Open: the units of the queries under UU and ER": ?VL "as set by the
+    VL command", ?TL "the software travel limits for the current axis assigned via the TL
+    command" and the others answer the board's registers, in motor steps, RE in encoder counts,
+    RU in user units. The bytes the entry quotes."""
+    h = Harness("PCIX-040")
+    steps = "AX;UU2000;VL5;?VL;AC10;?AC;VB1;?VB;HV5;?HV;TL10,-10;?TL;LP2000;RP;RU;RE;"
+    assert h.send(steps) == b"".join(
+        reply(r)
+        for r in (
+            *("vl10000", "ac20000", "vb2000", "hv10000", "tl20000,-20000"),
+            *("4000000", "uu2000.00000", "4000000"),
+        )
+    )
+    h = Harness("PCIX-040")
+    assert h.send("AX;ER2,1;" + steps[3:]) == b"".join(
+        reply(r)
+        for r in (
+            *("vl5000", "ac10000", "vb1000", "hv5000", "tl10000,-10000"),
+            *("2000000", "uu2000.00000", "4000000"),
+        )
+    )
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize(
+    ("ratio", "vl", "refused"),
+    [("ER1,2;", "1044000", False), ("ER1,2;", "1044001", True), ("ER2,1;", "1044001", True)],
+)
+def test_velocity_edges_hold_the_operand_before_the_ratio(
+    ratio: str, vl: str, refused: bool
+) -> None:
+    """ "RANGE: 1 ≤ VL ≤ 1044000" (PCIx; the PC48's "less than or equal to 1,044,000 steps per
+    second") is checked on the operand in the units it is typed in, encoder counts under ER,
+    when the command is typed: ER reaches the axis through its queue ("ER#,#; AX - AT 1"), so
+    the ratio the value will meet is not yet in force (docs/decisions.md, "Edges in steps").
+    ``ER1,2;VL1044000;`` is taken (2,088,000 steps/s), ``ER2,1;VL1044001;`` refused."""
+    h = Harness("PCIX-040")
+    h.send("AX;" + ratio + "VL" + vl + ";")
+    assert [e.command for e in h.errors()] == (["VL" + vl] if refused else [])
+
+
+def test_lo_sets_the_motor_position_scaled_by_user_units_not_by_the_ratio() -> None:
+    """LO "sets the motor position independently of the encoder position" (its example
+    ``LP100000; LO50000;``, "Set the motor position to 50,000"): under ``ER2,1;UU10;`` LO10 is
+    100 in the motor counter, the encoder left (docs/decisions.md, "What UU scales")."""
+    h = Harness("PCIX-040")
+    assert h.send("AX;ER2,1;UU10;LP0;LO10;RP;RE;") == reply("100") + reply("0")
+    assert h.errors() == []
+
+
+def test_a_contour_runs_in_motor_steps_under_a_ratio() -> None:
+    """Contour positions (CD, MT in a contour, CR) are not divided by the ratio: the path is the
+    one typed, in the counters' steps, at CV "counts per second" (docs/decisions.md,
+    "Contouring"). Under ``ER2,1`` on X and Y, ``MT1000,0`` in a contour ends at step 1000."""
+    h = Harness("PC48-4E")
+    h.send("AX ER2,1 AY ER2,1 AA VL1000,1000 CV1000 CD0,0; MT1000,0; CE CX ")
+    h.run()
+    assert h.position("X") == 1000
     assert h.errors() == []
