@@ -166,7 +166,7 @@ def on_aux_timer(ex: Executor, axis: Axis, t: float) -> None:
     §6.6 SE), whatever the axis does now. A motion PA drives that began since has cancelled the
     timer (:meth:`Executor.power_on`); any other (the hold's corrections, the PC48's jogs and
     home searches, the PCIx's streams) is no motion PA drives, and its end is no end of a move:
-    the output went on waiting for it until 2026-11-27."""
+    the output does not wait for it."""
     axis.aux_timer = None
     if axis.pa is not None:
         axis.aux = not axis.pa

@@ -34,7 +34,7 @@ How the tables are read
   S-curve 113; MT 6, 26, 26, the same, 113) are ``CommandSpec.follower``, charged when the
   command is read on every axis of the move but the master, as the registers and positions then
   foretell it (the master is the axis with the longest move time; an axis left where it is is
-  not modified). Until 2026-11-27 they were not charged (RQ showed the master's 4 on every axis).
+  not modified).
   The master's own row ("If this is the master axis for this move and its acceleration and
   velocity values need to be reset ... because a previous move altered them") prints no numbers
   of its own, and omsd gives the values back as each linear move starts: not charged.
