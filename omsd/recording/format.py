@@ -39,10 +39,13 @@ while writing) is ignored and said so; any other line that is not a record is an
 
 from __future__ import annotations
 
+import errno
+import io
 import json
 import math
 import os
-from collections.abc import Mapping
+import stat
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from enum import Enum
 from pathlib import Path
@@ -326,54 +329,47 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
     several boards in a log, ``board`` says which; :class:`RecordingError` otherwise, and for a
     file that is not a recording (one line, ``FILE:LINE: what``)."""
     name = str(path)
-    try:
-        with open(path, encoding="utf-8", errors="replace") as f:
-            lines = f.read().split("\n")
-    except OSError as exc:
-        raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
-    while lines and not lines[-1].strip():
-        lines.pop()
     header: dict[str, Any] | None = None
     traffic: list[tuple[int, Traffic]] = []
     notes: list[tuple[float, str, str]] = []
     served: dict[str, tuple[str, str]] = {}
     truncated = False
-    for number, text in enumerate(lines, 1):
-        if not text.strip():
-            continue
-        where = f"{name}:{number}"
-        try:
-            record = json.loads(text)
-        except json.JSONDecodeError as exc:
-            if number == len(lines):
-                truncated = True  # the writer was killed in the middle of its last line
-                break
-            raise RecordingError(f"{where}: not a JSON object: {exc.msg}") from None
-        except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
-            raise RecordingError(f"{where}: not a JSON object: nested too deeply") from None
-        if not isinstance(record, dict) or not isinstance(record.get("kind"), str):
-            raise RecordingError(f"{where}: not a record: expected an object with a kind")
-        kind = record["kind"]
-        if kind == "header":
-            if header is not None or traffic or notes:
-                raise RecordingError(f"{where}: a header, but not on the first line")
-            header = _header(record, where)
-            continue
-        t = record.get("t")
-        if not isinstance(t, int | float) or isinstance(t, bool) or not math.isfinite(t):
-            raise RecordingError(f"{where}: {kind} record without a time t")
-        if kind == "traffic":
+    with _open(name) as f:
+        lines = _lines(f, name)
+        for number, text in lines:
+            where = f"{name}:{number}"
             try:
-                item = Traffic.from_record(record)
-            except (KeyError, ValueError, TypeError) as exc:
-                raise RecordingError(f"{where}: not a traffic record: {_why(exc)}") from None
-            traffic.append((number, item))
-        elif kind in _MESSAGES:
-            message = str(record.get("message", ""))
-            notes.append((float(t), kind, message))
-            parts = message.split()
-            if kind == "info" and len(parts) >= 4 and parts[0] == "serving":
-                served[parts[1]] = (parts[2], parts[3])
+                record = json.loads(text)
+            except json.JSONDecodeError as exc:
+                if next(lines, None) is None:
+                    truncated = True  # the writer was killed in the middle of its last line
+                    break
+                raise RecordingError(f"{where}: not a JSON object: {exc.msg}") from None
+            except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
+                raise RecordingError(f"{where}: not a JSON object: nested too deeply") from None
+            if not isinstance(record, dict) or not isinstance(record.get("kind"), str):
+                raise RecordingError(f"{where}: not a record: expected an object with a kind")
+            kind = record["kind"]
+            if kind == "header":
+                if header is not None or traffic or notes:
+                    raise RecordingError(f"{where}: a header, but not on the first line")
+                header = _header(record, where)
+                continue
+            t = record.get("t")
+            if not isinstance(t, int | float) or isinstance(t, bool) or not math.isfinite(t):
+                raise RecordingError(f"{where}: {kind} record without a time t")
+            if kind == "traffic":
+                try:
+                    item = Traffic.from_record(record)
+                except (KeyError, ValueError, TypeError) as exc:
+                    raise RecordingError(f"{where}: not a traffic record: {_why(exc)}") from None
+                traffic.append((number, item))
+            elif kind in _MESSAGES:
+                message = str(record.get("message", ""))
+                notes.append((float(t), kind, message))
+                parts = message.split()
+                if kind == "info" and len(parts) >= 4 and parts[0] == "serving":
+                    served[parts[1]] = (parts[2], parts[3])
     if not traffic:
         raise RecordingError(f"{name}: no traffic in the file")
     boards = list(dict.fromkeys(item.board for _, item in traffic))
@@ -398,6 +394,58 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
         chunks.append(Chunk(last, item.direction, item.data, item.endpoint))
     kept = [(max(0.0, t - origin), kind, text) for t, kind, text in notes]
     return Recording(name, header, chosen, chunks, kept, served, origin, truncated)
+
+
+#: The longest line read, in characters: far more than any record (a traffic record of the
+#: largest read, 64 KiB, is at most 6 characters a byte). A longer one is no recording, and is
+#: not read further (a file of NULs, or binary garbage, without a line end).
+MAX_LINE = 1 << 23
+
+_KINDS = (
+    (stat.S_ISCHR, "a device"),
+    (stat.S_ISBLK, "a device"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISSOCK, "a socket"),
+    (stat.S_ISDIR, "a directory"),
+)
+
+
+def _open(name: str) -> io.TextIOWrapper:
+    """``name`` opened for reading as text, once it is known to be a regular file: a device
+    (/dev/zero), a FIFO (opened without waiting for a writer) or a directory is refused."""
+    try:
+        fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
+    except OSError as exc:
+        if exc.errno == errno.EISDIR:
+            raise RecordingError(f"{name}: not a recording: a directory, not a file") from None
+        raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            what = next((what for test, what in _KINDS if test(mode)), "not a regular file")
+            raise RecordingError(f"{name}: not a recording: {what}, not a file")
+        os.set_blocking(fd, True)
+        return open(fd, encoding="utf-8", errors="replace")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def _lines(f: io.TextIOWrapper, name: str) -> Iterator[tuple[int, str]]:
+    """The numbered lines of ``f`` that are not blank, each read at most :data:`MAX_LINE`
+    characters far (:class:`RecordingError` for a longer one)."""
+    number = 0
+    try:
+        while text := f.readline(MAX_LINE + 1):
+            number += 1
+            if len(text) > MAX_LINE:
+                raise RecordingError(
+                    f"{name}:{number}: not a recording: a line longer than {MAX_LINE} characters"
+                )
+            if text.strip():
+                yield number, text
+    except OSError as exc:
+        raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
 
 
 def _header(record: dict[str, Any], where: str) -> dict[str, Any]:

@@ -263,3 +263,17 @@ def test_the_help_quotes_the_recorders_default_linger() -> None:
     from omsd.recording import cli, record
 
     assert cli.DEFAULT_LINGER == record.DEFAULT_LINGER
+
+
+def test_a_replay_of_a_device_is_one_line_and_status_2() -> None:
+    # omsd replay /dev/zero used to read without end (and without bound of memory)
+    result = subprocess.run(
+        [sys.executable, "-m", "omsd.recording", "replay", "/dev/zero"],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+        stdin=subprocess.DEVNULL,
+    )
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert result.stderr == "omsd replay: /dev/zero: not a recording: a device, not a file\n"

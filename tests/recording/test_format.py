@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import stat
 from pathlib import Path
 
@@ -12,6 +13,7 @@ import pytest
 
 from omsd.board import AxisWorld, LimitWiring, SwitchType
 from omsd.config import BoardConfig
+from omsd.recording import format as format_module
 from omsd.recording.format import (
     RecordingError,
     RecordingWriter,
@@ -168,3 +170,45 @@ def test_a_daemon_log_is_read_board_by_board(tmp_path: Path) -> None:
         (kind, text) for _, kind, text in recording.notes
     ]
     assert [c.data for c in read_recording(path, "z").chunks] == [b"RP"]
+
+
+def test_what_is_not_a_recording_file_is_refused_without_reading_it(tmp_path: Path) -> None:
+    # a device, a FIFO (opened without waiting for a writer) or a directory is no recording: one
+    # line, at once; /dev/zero used to be read without end
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for path, what in (("/dev/zero", "a device"), (fifo, "a FIFO"), (tmp_path, "a directory")):
+        with pytest.raises(RecordingError, match=f"not a recording: {what}, not a file") as caught:
+            read_recording(path)
+        assert "\n" not in str(caught.value)
+
+
+def test_a_line_longer_than_any_record_is_refused_without_reading_it_whole(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a huge file of NULs (or of anything without a line end) is read at most one longest line
+    # far: the limit shortened here, the file a sparse 64 MiB of NULs
+    monkeypatch.setattr(format_module, "MAX_LINE", 4096, raising=False)
+    zeros = tmp_path / "zeros.jsonl"
+    with zeros.open("wb") as f:
+        f.truncate(64 << 20)
+    with pytest.raises(RecordingError, match=r"zeros.jsonl:1: not a recording: a line longer"):
+        read_recording(zeros)
+    path = tmp_path / "session.jsonl"
+    write(path)
+    lines = path.read_text().splitlines()
+    lines.insert(1, '{"t": 1.0, "kind": "info", "message": "' + "x" * 5000 + '"}')
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(RecordingError, match=r"session.jsonl:2: not a recording: a line longer"):
+        read_recording(path)
+
+
+def test_binary_garbage_is_one_line(tmp_path: Path) -> None:
+    garbage = tmp_path / "garbage.bin"
+    garbage.write_bytes(bytes(range(256)) * 64 + b"\n" + bytes(range(256)) * 64)
+    with pytest.raises(RecordingError, match=r"garbage.bin:1: not a JSON object") as caught:
+        read_recording(garbage)
+    assert "\n" not in str(caught.value)
+    garbage.write_bytes(b"\xff\xfe\x00" * 1000)  # one line cut short, and nothing else
+    with pytest.raises(RecordingError, match=r"garbage.bin: no traffic in the file"):
+        read_recording(garbage)
