@@ -24,7 +24,9 @@ or state file that cannot be opened, a pty link whose directory is missing). A r
 fix any of them, and systemd's ``RestartPreventExitStatus=2`` stops there. 130 after Ctrl-C
 during start-up. SIGTERM is a clean stop at any moment: 0, like a serving daemon's, also before
 the daemon's own handler is installed (the first ~0.2 s: imports, the configuration read), where
-it is handled by :func:`main`'s (nothing has been made then, and nothing is printed). Started by
+it is handled by :func:`main`'s (nothing has been made then, and nothing is printed); after the
+daemon has stopped (asyncio closing its loop, the process ending) SIGTERM and SIGINT are ignored:
+nothing is left to stop. Started by
 a parent that blocks SIGINT or SIGTERM (the mask is inherited across exec), omsd unblocks them.
 """
 
@@ -35,6 +37,7 @@ import gc
 import os
 import signal
 import sys
+from typing import TYPE_CHECKING
 
 from omsd import __version__
 from omsd.defaults import (
@@ -52,6 +55,9 @@ from omsd.defaults import (
     VIEWS,
 )
 from omsd.helptext import HelpFormatter, examples
+
+if TYPE_CHECKING:
+    from omsd.daemon import Daemon
 
 # Each command imports what it uses when it runs (issue 16: ``omsd --help``, ``omsd models`` and
 # ``omsd ctl`` within 3x ``python -c pass``): the parser needs argparse and the defaults it
@@ -413,6 +419,36 @@ def _terminated(signum: int, frame: object) -> None:
     raise _Terminated
 
 
+def _after_the_daemon(daemon: Daemon) -> None:
+    """In omsd's own process, serving: SIGTERM and SIGINT outside the daemon's loop handlers.
+    Before them (the loop being made) they stop omsd as before (status 0, 130); after them (the
+    daemon has stopped everything, asyncio is closing its loop) they are ignored: there is
+    nothing left to stop, and an exception raised by a handler there came out of whatever
+    callback asyncio ran, as its "Exception in callback" traceback."""
+
+    def handler(signum: int, frame: object) -> None:
+        if daemon.ended:
+            return
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise _Terminated
+
+    if signal.getsignal(signal.SIGTERM) is not _terminated:
+        return  # main() called with a command line (a test): its signals stay its caller's
+    signal.signal(signal.SIGTERM, handler)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # (not an ignored one)
+        signal.signal(signal.SIGINT, handler)
+
+
+def _ending() -> None:
+    """omsd's own process returns from :func:`main`: a SIGTERM or SIGINT from here on (atexit
+    functions, the interpreter's finalization, which gives Python's handlers back to the
+    default action) is ignored, not a traceback or death by the signal."""
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        if signal.getsignal(sig) is not signal.SIG_IGN:
+            signal.signal(sig, signal.SIG_IGN)
+
+
 def _sigterm_default() -> None:
     """A command that does not serve dies by SIGTERM, as a command does."""
     if signal.getsignal(signal.SIGTERM) is _terminated:
@@ -422,6 +458,14 @@ def _sigterm_default() -> None:
 def main(argv: list[str] | None = None) -> int:
     """The ``omsd`` command (``argv`` None: the process's own command line, and the process is
     omsd's: then SIGTERM is handled from here on, and SIGINT and SIGTERM unblocked)."""
+    try:
+        return _run_main(argv)
+    finally:
+        if argv is None:
+            _ending()
+
+
+def _run_main(argv: list[str] | None) -> int:
     try:
         if argv is None:
             # first thing: a SIGTERM before the daemon's loop handles it (imports, the file
@@ -577,8 +621,10 @@ def _start_and_serve(args: argparse.Namespace) -> int:
     except OSError as exc:  # TrafficLogError: "cannot open traffic log PATH: REASON"
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
+    daemon = Daemon(config, log, freeze=True)
+    _after_the_daemon(daemon)
     try:
-        run(Daemon(config, log, freeze=True).run(), loop_factory)
+        run(daemon.run(), loop_factory)
     except StartupError as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return exc.status

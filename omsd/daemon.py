@@ -138,6 +138,7 @@ class Daemon:
         self.serials: list[SerialEndpoint] = []
         self.endpoints: list[Endpoint] = []
         self._stop = asyncio.Event()
+        self.ended = False  # run() has stopped everything and given the signals back
         self.saver: FlashSaver | None = None
         self.control: ControlServer | None = None
         self.mqtt: MqttBridge | None = None
@@ -482,13 +483,20 @@ class Daemon:
                 sdnotify.stopping()
                 await self.stop()
         finally:
-            # the handlers from before the loop's again (omsd.cli's for SIGTERM), not the
-            # defaults remove_signal_handler leaves: a SIGTERM while the process ends is a
-            # clean stop too
-            for sig in signals:
-                loop.remove_signal_handler(sig)
-                if previous[sig] is not None:
-                    signal.signal(sig, previous[sig])
+            # the handlers from before the loop's again (omsd.cli's for SIGTERM and SIGINT,
+            # which ignore a signal once ``ended``), not the defaults remove_signal_handler
+            # leaves: a SIGTERM while the process ends is a clean stop too
+            # (blocked meanwhile: remove_signal_handler puts the default action in place, and
+            # a SIGTERM or SIGINT in between killed omsd or raised KeyboardInterrupt)
+            self.ended = True
+            mask = signal.pthread_sigmask(signal.SIG_BLOCK, signals)
+            try:
+                for sig in signals:
+                    loop.remove_signal_handler(sig)
+                    if previous[sig] is not None:
+                        signal.signal(sig, previous[sig])
+            finally:
+                signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
     def reopen_logs(self) -> None:
         """SIGHUP: open the log file again (after logrotate renamed it, a new one), and say so.

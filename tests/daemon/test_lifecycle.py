@@ -241,3 +241,61 @@ def test_json_lines_log_has_the_traffic(omsd: Omsd, tmp_path: Path) -> None:
     assert times == sorted(times)
     events = [r["what"] for r in records if r["kind"] == "event"]
     assert any("done" in e for e in events), events
+
+
+# omsd as `python -c`, with the signal sent to itself at a set point after the daemon has
+# stopped and removed its loop's handlers: from a callback of asyncio's own shutdown (the loop
+# still running, omsd's handlers gone), or from an atexit function (the interpreter ending)
+_LATE = """
+import asyncio, atexit, os, signal, sys
+from omsd import cli, daemon
+
+SIG = signal.{sig}
+run = daemon.Daemon.run
+
+
+async def late(self):
+    try:
+        await run(self)
+    finally:
+        if "{where}" == "loop":
+            asyncio.get_running_loop().call_soon(os.kill, os.getpid(), SIG)
+
+
+daemon.Daemon.run = late
+if "{where}" == "atexit":
+    atexit.register(os.kill, os.getpid(), SIG)
+sys.exit(cli.main())
+"""
+
+
+@pytest.mark.parametrize("where", ["loop", "atexit"])
+@pytest.mark.parametrize("sig", STOP_SIGNALS, ids=lambda s: s.name)
+def test_a_signal_while_the_process_ends_is_no_traceback(
+    tmp_path: Path, sig: signal.Signals, where: str
+) -> None:
+    """SIGTERM is a clean stop at any moment (omsd/cli.py); one that came after the daemon had
+    stopped, while asyncio closed its loop, was raised by the handler restored then inside
+    whatever callback asyncio ran: its "Exception in callback" traceback, or "Exception
+    ignored in atexit callback" (a late SIGINT: status 130 or death by SIGINT). The daemon has
+    stopped then; the signal is now ignored: status 0, nothing on standard error after
+    "stopped"."""
+    code = _LATE.format(sig=sig.name, where=where)
+    process = subprocess.Popen(
+        [sys.executable, "-c", code, "--tcp", "127.0.0.1:0", "--control", "off"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env={**daemon_env(), "XDG_RUNTIME_DIR": str(tmp_path)},
+        preexec_fn=_default_sigint,
+    )
+    try:
+        assert process.stdout is not None
+        assert process.stdout.readline().startswith(b"board1 PC48-4E driver tcp 127.0.0.1:")
+        process.send_signal(signal.SIGTERM)
+        out, err = process.communicate(timeout=TIMEOUT)
+    finally:
+        process.kill()
+        process.wait()
+    assert (process.returncode, out) == (0, b""), err.decode()
+    assert err.decode().rstrip("\n").endswith(" stopped"), err.decode()
