@@ -53,6 +53,12 @@ is refused. Each wakes at every change
 of its board: 20,000 of them, sent in one go, took the daemon's whole CPU, every board stopped
 answering and SIGTERM went unheard."""
 
+MAX_CONNECTIONS = 64
+"""Connections the TCP endpoint holds at once (``[control] tcp``: local, unauthenticated); a
+newcomer beyond them is told so in one line and closed, as the web dashboard's are. Without a
+bound, anyone who could reach the port could hold every file descriptor of the daemon, and its
+boards could take no client. The Unix socket (owner-only, or a group's) has none."""
+
 COUNTER = 2**31 - 1
 """The largest slip (steps) or encoder count the ``slip`` and ``encoder`` operations take, either
 way: what a 32-bit counter holds, beyond every position range of the manuals (PC48 Appendix C:
@@ -80,6 +86,7 @@ class ControlServer:
         self._writers: set[Writer] = set()
         self._requests: dict[Writer, set[asyncio.Task[None]]] = {}  # in progress, by connection
         self._waits = 0  # wait operations in progress
+        self._tcp = 0  # connections of the TCP endpoint
         self.subscriptions: dict[Writer, Subscription] = {}
 
     # -- listening ------------------------------------------------------------------------------
@@ -108,7 +115,7 @@ class ControlServer:
         os.chmod(path, 0o600 if group is None else 0o660)
 
     async def listen_tcp(self, host: str, port: int) -> tuple[str, int]:
-        server = await asyncio.start_server(self._connection, host, port, limit=MAX_LINE)
+        server = await asyncio.start_server(self._tcp_connection, host, port, limit=MAX_LINE)
         self.servers.append(server)
         return bound_address(server, host)
 
@@ -132,6 +139,22 @@ class ControlServer:
         self.paths.clear()
 
     # -- connections ----------------------------------------------------------------------------
+
+    async def _tcp_connection(
+        self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter
+    ) -> None:
+        """A connection of the TCP endpoint: served, or beyond :data:`MAX_CONNECTIONS` told
+        so and closed."""
+        if self._tcp >= MAX_CONNECTIONS:
+            error = f"too many control connections ({MAX_CONNECTIONS}): try again later"
+            writer.write(encode({"id": None, "ok": False, "error": error}))
+            writer.close()  # (the line goes out first)
+            return
+        self._tcp += 1
+        try:
+            await self._connection(reader, writer)
+        finally:
+            self._tcp -= 1
 
     async def _connection(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         self._writers.add(writer)
