@@ -66,7 +66,9 @@ descriptor of the daemon, and its boards could take no client."""
 
 HEAD_TIMEOUT = 10.0
 """Seconds a new connection has to send its first request's head (the request line and the
-headers): a client that sends a byte a second (slowloris) is closed, not kept for ever."""
+headers), and a kept-alive one its next head after the last answer (aiohttp's
+``keepalive_timeout``, 75 s or an hour by default): a client that sends a byte a second
+(slowloris) is closed, not kept for ever. A WebSocket, once open, is not cut."""
 
 BUSY = (
     b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
@@ -191,7 +193,9 @@ class WebServer:
         self._handler = _OneLine(self.log)
         _AIOHTTP.addHandler(self._handler)
         _AIOHTTP.propagate = False
-        runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        runner = web.AppRunner(
+            app, access_log=None, handle_signals=False, keepalive_timeout=HEAD_TIMEOUT
+        )
         await runner.setup()
         self.runner = runner
         try:

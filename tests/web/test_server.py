@@ -464,3 +464,42 @@ async def test_without_aiohttp_omsd_says_what_to_install(
         await daemon.start()
     assert "\n" not in str(caught.value)
     assert not daemon.services and not daemon.servers
+
+
+async def test_a_later_request_head_on_a_kept_alive_connection_is_bounded_too(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """HEAD_TIMEOUT covered a connection's first request head only: a client that sent one
+    request on a kept-alive connection, then its second head a byte now and then, was kept
+    as long as aiohttp's keep-alive timeout (75 s in aiohttp 3.9, an hour in 3.14). Now a
+    kept-alive connection must send its next head within HEAD_TIMEOUT of the last answer
+    (shortened here to 0.5 s) or it is closed."""
+    import omsd.web.server as module
+
+    monkeypatch.setattr(module, "HEAD_TIMEOUT", 0.5, raising=False)
+    async with dashboard(tmp_path) as dash:
+        host, port = dash.url[len("http://") :].rsplit(":", 1)
+        reader, writer = await asyncio.open_connection(host, int(port))
+        try:
+            writer.write(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+            head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), WAIT)
+            assert head.startswith(b"HTTP/1.1 200 "), head
+            fields = dict(line.split(b": ", 1) for line in head.split(b"\r\n")[1:] if b": " in line)
+            assert fields.get(b"Connection", b"keep-alive").lower() != b"close", head
+            await asyncio.wait_for(reader.readexactly(int(fields[b"Content-Length"])), WAIT)
+            writer.write(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ")
+            started = time.monotonic()
+            closed = False
+            while not closed and time.monotonic() - started < WAIT:
+                with contextlib.suppress(ConnectionError):
+                    writer.write(b"a")
+                try:
+                    closed = await asyncio.wait_for(reader.read(), 0.1) == b""
+                except TimeoutError:
+                    continue
+                except ConnectionError:  # closed with the client's last byte unread: a reset
+                    closed = True
+            assert closed, "a slow second request head was kept past HEAD_TIMEOUT"
+        finally:
+            writer.close()
+        assert await board_says(dash.ports["xy"], b"WY\n") == b"PC48 ver 3.00-4\n"
