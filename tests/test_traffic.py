@@ -369,6 +369,39 @@ def test_a_failing_file_is_reported_once_and_closed(tmp_path: pathlib.Path) -> N
     log.close()
 
 
+@pytest.mark.parametrize("journal", [False, True], ids=["stderr", "journal"])
+def test_a_failing_file_is_reported_with_the_view_off_too(journal: bool) -> None:
+    """With ``view = "off"`` the error of a traffic log file omsd gave up on (a full disk)
+    went to the view, which is off, and to the file, which had just failed: it reached no one.
+    Now an error that nothing else takes (view off, no file) is one plain line on the stream,
+    with the journal's error level where the stream is the journal; nothing else is shown."""
+    if not os.path.exists("/dev/full"):
+        pytest.skip("no /dev/full")
+    out = io.StringIO()
+    env = {"JOURNAL_STREAM": "1:2"} if journal else {}
+    log = TrafficLog("off", file=pathlib.Path("/dev/full"), stream=out, env=env)
+    log.info("serving")
+    log.record(wy())
+    log.record(wy())
+    log.warning("a warning")
+    log.close()
+    lines = out.getvalue().splitlines()
+    assert len(lines) == 1, lines
+    prefix = "<3>" if journal else ""
+    assert re.fullmatch(
+        re.escape(prefix)
+        + r"\d\d:\d\d:\d\d\.\d{3} error: traffic log /dev/full: No space left on device;"
+        r" no longer written",
+        lines[0],
+    ), lines
+    quiet = io.StringIO()
+    with TrafficLog("off", stream=quiet, env={}) as log:
+        log.error("one\ntwo")
+        log.info("not shown")
+    assert quiet.getvalue().endswith(" error: one two\n"), quiet.getvalue()
+    assert quiet.getvalue().count("\n") == 1
+
+
 CHILD = textwrap.dedent(
     """
     import pathlib, sys

@@ -258,13 +258,15 @@ class TrafficLog:
         self._stream: TextIO = sys.stderr if stream is None else stream
         self._clock = clock
         environ: Mapping[str, str] = os.environ if env is None else env
-        journal = view in ("auto", "plain") and _on_journal(self._stream, environ)
+        on_journal = _on_journal(self._stream, environ)
+        journal = view in ("auto", "plain") and on_journal
         if view == "auto":
             view = "plain" if journal or not _isatty(self._stream) else "rich"
         self.view = view
         """The view in use: ``rich``, ``plain`` or ``off`` (never ``auto``)."""
         self.journal = journal
         """Whether plain lines carry sd-daemon(3) level prefixes."""
+        self._on_journal = on_journal  # (for the errors said with the view off)
         self.path = file
         self.group = group
         self._styles: RichStyles | None = None
@@ -415,9 +417,22 @@ class TrafficLog:
     # ----------------------------------------------------------------- writing a batch
 
     def _message(self, level: str, message: str, view: bool = True) -> None:
-        self._queue.append((_MESSAGE, self._clock(), level, message, view))
+        t = self._clock()
+        self._queue.append((_MESSAGE, t, level, message, view))
+        if level == "error" and self.view == "off" and self._fd is None:
+            self._say(t, message)
         if not self._held:
             self._flush()
+
+    def _say(self, t: float, message: str) -> None:
+        """An error that neither the view (off) nor the file (none, or given up: a full disk)
+        would take, as one plain line on the stream all the same (the journal's error level on
+        the journal): the failure of the log itself must reach someone."""
+        prefix = SD_ERR if self._on_journal else ""
+        line = " ".join(message.split())
+        with contextlib.suppress(OSError, ValueError):  # (a stream given up: a closed pipe)
+            self._stream.write(f"{prefix}{clock_text(t)} error: {line}\n")
+            self._stream.flush()
 
     def _flush(self) -> None:
         """Format what is kept and write it: the JSON lines in one write to the file, the
