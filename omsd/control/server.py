@@ -21,7 +21,6 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from omsd.board.events import Event
 from omsd.control.protocol import (
     MAX_LINE,
     MAX_WAIT,
@@ -32,15 +31,15 @@ from omsd.control.protocol import (
     decode,
     encode,
 )
+from omsd.control.waits import BoardWaits
 from omsd.control.watch import Subscription, options
 from omsd.faults import Faults
 from omsd.files import group_id
 from omsd.service import BoardService
-from omsd.telemetry.traffic import Traffic, TrafficLog
+from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import Endpoint, bound_address
 
 DEFAULT_WAIT = 10.0  # seconds of real time a wait may take unless told
-POSITION_POLL = 0.002  # seconds between two looks at a moving axis for ``wait position``
 MAX_PENDING = 512
 """Requests of one connection in progress at once (waits included: at most ``MAX_WAITS``); with
 that many, the connection is read no further until one is answered. A client that asked and
@@ -49,9 +48,9 @@ never read the answers had every line it sent made a task at once: 1.6 GB in 15 
 MAX_WAITS = 256
 """``wait`` operations in progress at once, of all the connections of one control server (the
 socket's; the dashboard and the MQTT bridge have one each, with a bound of their own); one more
-is refused. Each wakes at every change
-of its board: 20,000 of them, sent in one go, took the daemon's whole CPU, every board stopped
-answering and SIGTERM went unheard."""
+is refused. A board's waits are looked at together, once at every change of the board
+(:mod:`omsd.control.waits`); when each woke at every change on its own, 20,000 of them, sent in
+one go, took the daemon's whole CPU, every board stopped answering and SIGTERM went unheard."""
 
 MAX_CONNECTIONS = 64
 """Connections the TCP endpoint holds at once (``[control] tcp``: local, unauthenticated); a
@@ -86,6 +85,7 @@ class ControlServer:
         self._writers: set[Writer] = set()
         self._requests: dict[Writer, set[asyncio.Task[None]]] = {}  # in progress, by connection
         self._waits = 0  # wait operations in progress
+        self._board_waits: dict[str, BoardWaits] = {}  # those in progress, by board
         self._tcp = 0  # connections of the TCP endpoint
         self.subscriptions: dict[Writer, Subscription] = {}
 
@@ -521,38 +521,20 @@ class ControlServer:
             return self._state(service)
         if self._waits >= MAX_WAITS:
             raise ControlError(f"too many waits in progress ({MAX_WAITS}): wait for one to end")
-        woken = asyncio.Event()
-        watcher = _Watcher(woken)
-        service.observers.append(watcher)
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + timeout
+        waits = self._board_waits.get(service.name)
+        if waits is None:
+
+            def ended() -> None:
+                del self._board_waits[service.name]
+
+            waits = self._board_waits[service.name] = BoardWaits(service, ended)
         self._waits += 1
-        changed = False
         try:
-            while True:
-                # woken by a change, the board has just run; only a wait that woke by itself
-                # runs it (running it tells every watcher it changed: two waits that each ran
-                # it when woken woke each other for ever, at 100 % of a core)
-                if not changed:
-                    service.service()
-                if check():
-                    return self._state(service)
-                left = deadline - loop.time()
-                if left <= 0:
-                    raise ControlError(f"timed out after {timeout:g} s waiting for {until}")
-                woken.clear()
-                poll = POSITION_POLL if until == "position" else left
-                # asyncio.timeout, not wait_for: Python 3.11's wait_for swallows a cancel that
-                # comes as the event is set, and the wait of a client that has gone went on
-                try:
-                    async with asyncio.timeout(min(left, max(poll, 0.001))):
-                        await woken.wait()
-                    changed = True
-                except TimeoutError:
-                    changed = False
+            if not await waits.until(check, timeout, position=until == "position"):
+                raise ControlError(f"timed out after {timeout:g} s waiting for {until}")
         finally:
             self._waits -= 1
-            service.observers.remove(watcher)
+        return self._state(service)
 
     def _condition(
         self, service: BoardService, m: dict[str, Any], until: object
@@ -584,22 +566,6 @@ class ControlServer:
 
             return reached
         raise AssertionError(until)  # pragma: no cover - checked above
-
-
-class _Watcher:
-    """Wakes a waiter whenever the board has run."""
-
-    def __init__(self, woken: asyncio.Event) -> None:
-        self.woken = woken
-
-    def traffic(self, service: BoardService, record: Traffic) -> None:
-        pass
-
-    def event(self, service: BoardService, when: float, event: Event) -> None:
-        self.woken.set()
-
-    def changed(self, service: BoardService) -> None:
-        self.woken.set()
 
 
 def _number(m: dict[str, Any], key: str) -> float:
