@@ -404,15 +404,15 @@ MAX_LINE = 1 << 23
 _KINDS = (
     (stat.S_ISCHR, "a device"),
     (stat.S_ISBLK, "a device"),
-    (stat.S_ISFIFO, "a FIFO"),
     (stat.S_ISSOCK, "a socket"),
     (stat.S_ISDIR, "a directory"),
 )
 
 
 def _open(name: str) -> io.TextIOWrapper:
-    """``name`` opened for reading as text, once it is known to be a regular file: a device
-    (/dev/zero), a FIFO (opened without waiting for a writer) or a directory is refused."""
+    """``name`` opened for reading as text, once it is known to be a regular file or a pipe
+    (``<(zcat run.jsonl.gz)``; a named one is opened without waiting for a writer, and with
+    none read as empty): a device (/dev/zero) or a directory is refused."""
     try:
         fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
     except OSError as exc:
@@ -421,7 +421,7 @@ def _open(name: str) -> io.TextIOWrapper:
         raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
     try:
         mode = os.fstat(fd).st_mode
-        if not stat.S_ISREG(mode):
+        if not (stat.S_ISREG(mode) or stat.S_ISFIFO(mode)):
             what = next((what for test, what in _KINDS if test(mode)), "not a regular file")
             raise RecordingError(f"{name}: not a recording: {what}, not a file")
         os.set_blocking(fd, True)

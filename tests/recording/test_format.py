@@ -7,6 +7,7 @@ import io
 import json
 import os
 import stat
+import threading
 from pathlib import Path
 
 import pytest
@@ -173,14 +174,33 @@ def test_a_daemon_log_is_read_board_by_board(tmp_path: Path) -> None:
 
 
 def test_what_is_not_a_recording_file_is_refused_without_reading_it(tmp_path: Path) -> None:
-    # a device, a FIFO (opened without waiting for a writer) or a directory is no recording: one
-    # line, at once; /dev/zero used to be read without end
-    fifo = tmp_path / "fifo"
-    os.mkfifo(fifo)
-    for path, what in (("/dev/zero", "a device"), (fifo, "a FIFO"), (tmp_path, "a directory")):
+    # a device or a directory is no recording: one line, at once; /dev/zero used to be read
+    # without end
+    for path, what in (("/dev/zero", "a device"), (tmp_path, "a directory")):
         with pytest.raises(RecordingError, match=f"not a recording: {what}, not a file") as caught:
             read_recording(path)
         assert "\n" not in str(caught.value)
+    # a named pipe with no writer is opened without waiting for one, and reads as empty
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(RecordingError, match="no traffic in the file"):
+        read_recording(fifo)
+
+
+def test_a_recording_through_a_pipe_is_read(tmp_path: Path) -> None:
+    # ``omsd replay <(zcat run.jsonl.gz)``: the shell gives a pipe's /dev/fd path
+    path = tmp_path / "session.jsonl"
+    write(path)
+    expected = read_recording(path)
+    r, w = os.pipe()
+    writer = threading.Thread(target=lambda: (os.write(w, path.read_bytes()), os.close(w)))
+    writer.start()
+    try:
+        got = read_recording(f"/dev/fd/{r}")
+    finally:
+        writer.join()
+        os.close(r)
+    assert got.chunks == expected.chunks and got.header == expected.header
 
 
 def test_a_line_longer_than_any_record_is_refused_without_reading_it_whole(
