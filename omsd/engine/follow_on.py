@@ -120,6 +120,85 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
     return True
 
 
+def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
+    """The start of ``Machine.advance`` to ``now`` (issue 16): while every instant due by ``now``
+    is :func:`ends_that_follow_on`'s case, moves that end with the next in their queue, run
+    each instant, in time order, as that function and the settle after it would, looking at
+    the axes the instant is about alone, and stop before the first instant that is not (the
+    straightforward way goes on from there).
+
+    Why the other axes need not be looked at again at each instant: they are looked at once,
+    first, and each has nothing queued, or waits for its own motion with its mover the waiting
+    command's sender (``Machine.settle``'s own fast path passes it by, and ``Executor.step``
+    would change nothing), and the front holds nothing; anything else (a timed wait, a wait for
+    an input or a group, a front with input to read), and nothing is done here. What an instant
+    of follow-ons changes is its own axes, each left moving and waiting for that motion with its
+    mover the sender (:func:`_start`): so every axis stays as it was looked at, every settle
+    after an instant would step no axis and read nothing (its pump, made once at the end, names
+    the sender the talker), and what it says of the machine (``Core.unsettle``) is said once,
+    at the end, for all. ``tests/board/test_fast_paths.py`` runs it against the board without
+    fast paths."""
+    machine = ex.machine
+    if machine.init_until is not None or not machine.front.holds_nothing():
+        return
+    due: list[Axis] = []
+    for axis in machine.axes:
+        if axis.gear is not None:
+            return  # (no axis is geared: none follows another's move, _next_move need not ask)
+        wait = axis.wait
+        if wait is None:
+            if axis.queue.pc < len(axis.queue.program):
+                return  # (a step would run its queue)
+        elif wait.kind != "motion" or axis.motion is _IDLE or not _moves_for_sender(axis):
+            return
+        event = axis.event  # (read without a call where it is known, as Machine._next_internal)
+        when = axis.next_event_time() if event is None else event[0]
+        if when is not None and when <= now:
+            due.append(axis)
+    last: float | None = None
+    while due:
+        t = min(axis.event[0] for axis in due if axis.event is not None)
+        tick = machine.clock.at_or_after(t)
+        if tick > max(machine.now, t):
+            break  # (_next_move's own condition: a start after now)
+        starts: list[tuple[Axis, float, _Start]] = []
+        for axis in due:
+            event = axis.event
+            if event is None or event[0] != t:
+                continue  # due later
+            if not _ends_plainly(axis, t):
+                break
+            traj = axis.traj
+            x = float(steps(traj.position(t), traj.x0))  # (Axis.settle: on a whole step)
+            machine.now = max(machine.now, t)  # (as Machine.advance, before the instant's events)
+            start = _next_move(machine, axis, codes, tick, x, gears=False)
+            if start is None:
+                break
+            starts.append((axis, x, start))
+        else:
+            for axis, x, start in starts:
+                axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
+                _start(machine, axis, tick, start, True)
+                when = axis.next_event_time()
+                if when is None or when > now:
+                    due.remove(axis)
+            last = t
+            continue
+        break  # (an instant with more than follow-ons: the straightforward way's)
+    if last is not None:
+        machine.talker = 0  # (Machine._handle_due, after the follow-ons)
+        machine.unsettle(outside=False)  # (the settle after an instant's events)
+        machine.front.pump(last)
+        machine.settled = True
+
+
+def _moves_for_sender(axis: Axis) -> bool:
+    """``axis``, waiting for its motion, is passed by in a settle: its mover is the waiting
+    command's sender (``Machine.settle``)."""
+    q = axis.queue
+    return q.pc < len(q.program) and q.program[q.pc].source == axis.source
+
+
 def _ends_plainly(axis: Axis, t: float) -> bool:
     """What is due for ``axis`` at ``t`` is the end of a move, and ``reactions.on_end`` would
     leave it at rest with nothing more due at ``t`` and nothing to do but note where it is: no
@@ -143,10 +222,11 @@ _Start = tuple[Op, float, float, float, Course]
 
 
 def _next_move(
-    machine: Core, axis: Axis, codes: Collection[str], tick: float, x: float
+    machine: Core, axis: Axis, codes: Collection[str], tick: float, x: float, gears: bool = True
 ) -> _Start | None:
     """The move the axis's queue starts next, on ``tick`` from ``x``, if it follows on (see
-    :func:`follow_on`); ``None`` if not. Changes nothing."""
+    :func:`follow_on`); ``None`` if not. Changes nothing. ``gears=False``: no axis of the
+    machine is geared (the caller has looked), so none follows this one."""
     wait = axis.wait
     queue = axis.queue
     program, pc = queue.program, queue.pc
@@ -170,7 +250,7 @@ def _next_move(
         or axis.servo is not None
         or axis.pa is not None
         or axis.in_arm is not None
-        or followed(axis)  # (gearing.moved would have them follow: left to the general way)
+        or (gears and followed(axis))  # (gearing.moved would have them follow: the general way)
     ):
         return None
     # Executor.start_pending's arithmetic: the target, from where the axis stands on the tick
@@ -189,8 +269,7 @@ def _start(machine: Core, axis: Axis, tick: float, start: _Start, after_events: 
     rest on ``tick`` (``now``: nothing before it to keep) would."""
     go, x, target, distance, course = start
     queue = axis.queue
-    queue.advance()
-    queue.advance()
+    queue.advance(2)  # (the move command and GO)
     saved = machine.talker
     machine.talker = axis.source = go.source
     axis.pending = None

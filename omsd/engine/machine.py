@@ -23,7 +23,7 @@ from omsd.engine.axis import Axis
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor, OpFunction, SensorHook
 from omsd.engine.extensions import BARE, Framing, Options
-from omsd.engine.follow_on import ends_that_follow_on, follow_on
+from omsd.engine.follow_on import ends_that_follow_on, follow_on, follow_on_until
 from omsd.engine.ops_flow import FLOW_OPS
 from omsd.engine.ops_motion import MOTION_OPS
 from omsd.engine.ops_parameters import PARAMETER_OPS
@@ -120,8 +120,13 @@ class Machine(Core):
         """Let everything that happens by itself happen, up to ``now``."""
         if now < self.now:
             now = self.now
-        for _ in range(MAX_EVENTS_PER_ADVANCE):
+        t = self._next_internal()
+        if t is not None and t <= now and self.fast_paths:
+            # fast path: the instants at which moves end and the next start, taken first
+            # (omsd.engine.follow_on); the loop goes on from the first that is more than that
+            follow_on_until(self.executor, self._follow_on_codes, now)
             t = self._next_internal()
+        for _ in range(MAX_EVENTS_PER_ADVANCE):
             if t is None or t > now:
                 break
             self.now = max(self.now, t)
@@ -131,6 +136,7 @@ class Machine(Core):
                 self.settle(t)
             finally:
                 self.after_events = False
+            t = self._next_internal()
         self.now = now
 
     def next_deadline(self) -> float | None:

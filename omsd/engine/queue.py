@@ -105,8 +105,10 @@ class CommandQueue:
         self.program.append(op)
         self.used += op.slots
 
-    def advance(self) -> None:
-        self.pc += 1
+    def advance(self, ops: int = 1) -> None:
+        """Pass the current op (and ``ops - 1`` after it), reclaiming their slots: as that many
+        single advances would."""
+        self.pc += ops
         self.reclaim()
 
     def jump(self, index: int) -> None:

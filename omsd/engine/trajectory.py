@@ -187,9 +187,11 @@ class Trajectory:
         only places a piece's position can be extreme."""
         if self._extent is None:
             course = self._course
-            points = self._points() if course is None else course.extremes
             final = self.final if self.pieces and self.is_finite else None
-            lowest, highest = _bounds(self.x0, self._offsets, points, final)
+            if course is None:
+                lowest, highest = _bounds(self.x0, self._offsets, self._points(), final)
+            else:
+                lowest, highest = _spans(self.x0, self._offsets, course.spans, final)
             for piece in self.pieces:  # a cruise without end (first_time's own rule)
                 if math.isinf(piece.duration):
                     v = piece.v(0.0)
@@ -232,6 +234,25 @@ def _bounds(
     return lowest, highest
 
 
+def _spans(
+    x0: float, offsets: list[float], spans: list[tuple[float, float]], final: float | None
+) -> tuple[float, float]:
+    """What :func:`_bounds` finds, from each piece's lowest and highest point (``spans``):
+    the same numbers, to the last bit (a sum of floats never decreases as a term grows, so the
+    lowest of ``base + point`` is ``base`` plus the lowest point)."""
+    lowest = highest = x0
+    for base, (low, high) in zip(offsets, spans, strict=True):
+        x = base + low
+        if x < lowest:
+            lowest = x
+        x = base + high
+        if x > highest:
+            highest = x
+    if final is not None:
+        lowest, highest = min(lowest, final), max(highest, final)
+    return lowest, highest
+
+
 class Course:
     """A finite motion's pieces and what a :class:`Trajectory` works out from them that does
     not depend on where or when the motion starts: when each piece starts, how far each takes
@@ -242,7 +263,7 @@ class Course:
     are those ``Trajectory`` computes, in the same order: the same results to the last bit
     (``tests/board/test_fast_paths.py``)."""
 
-    __slots__ = ("duration", "extremes", "pieces", "starts", "steps")
+    __slots__ = ("duration", "extremes", "pieces", "spans", "starts", "steps")
 
     def __init__(self, pieces: Sequence[Piece]) -> None:
         self.pieces = tuple(p for p in pieces if p.duration > 0.0)
@@ -260,6 +281,7 @@ class Course:
         self.starts = starts
         self.steps = steps
         self.extremes = extremes
+        self.spans = [(min(xs), max(xs)) for xs in extremes]  # (Trajectory.extent, _spans)
         self.duration = t
 
 

@@ -319,6 +319,50 @@ def test_a_polled_board_in_motion_says_the_same(model: str) -> None:
         twin.take_output_sourced()
 
 
+@pytest.mark.parametrize("model", ["PC48-8", "PCIX-040"])  # (a servo's moves never follow on)
+@pytest.mark.parametrize(
+    "queue",
+    [
+        "MR3000;GO;MR-3000;GO;" * 3,
+        # a command among the moves that is not one (the instant of its step is not a
+        # follow-on's: the fast way stops before it, the straightforward way goes on)
+        "MR3000;GO;MR-3000;GO;ID;MR3000;GO;MR-300;GO;",
+        # a timed wait in the queue (an axis waiting for time is not passed by: not taken)
+        "MR3000;GO;WT100;MR-3000;GO;MR3000;GO;",
+    ],
+)
+def test_a_board_run_only_when_polled_says_the_same(
+    model: str, queue: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The load benchmark's traffic as the daemon runs it: the board is run only when polled
+    (no host hears the queued moves: it is not woken for them, ``omsd.engine.quiet``), so
+    several moves end, and the next start, between two polls; the poll's advance takes those
+    instants first (``follow_on_until``), more than one in one advance, where it can."""
+    most = [0]
+    until = follow_on.follow_on_until
+
+    def counted(ex: Any, codes: Any, now: float) -> None:
+        before = [(axis.traj, axis.queue.used) for axis in ex.machine.axes]
+        until(ex, codes, now)
+        after = [(axis.traj, axis.queue.used) for axis in ex.machine.axes]
+        most[0] = max(most[0], sum(a != b for a, b in zip(after, before, strict=True)))
+
+    monkeypatch.setattr(machine_module, "follow_on_until", counted)
+    twin = Twin(get_model(model))
+    axes = twin.model.axes
+    twin.receive(b"AA;VL5000" + b",5000" * (len(axes) - 1) + b";", 0.0, 1)
+    twin.receive(b"AC50000" + b",50000" * (len(axes) - 1) + b";", 0.0, 1)
+    for i, letter in enumerate(axes):
+        job = f"JG{2000 * (-1) ** i};" if i < len(axes) // 2 else queue
+        twin.receive(f"A{letter};{job}".encode(), 0.0, 1)
+    now = 0.0
+    for k in range(60):
+        now += 0.35  # (half a move: the queued axes' ends fall between the polls)
+        twin.receive(f"A{axes[k % len(axes)]} QA RP;".encode(), now, 1)
+        twin.take_output_sourced()
+    assert most[0] >= 2  # (several axes' moves, in one advance)
+
+
 def _load(path: Path, name: str) -> ModuleType:
     spec = importlib.util.spec_from_file_location(name, path)
     assert spec is not None and spec.loader is not None
@@ -533,10 +577,14 @@ def test_a_queued_move_clear_of_the_switches_is_not_looked_at(
 
 
 def started(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
-    """Count the moves the follow-on's fast path starts: at an instant's ends
-    (``ends_that_follow_on``, before the reactions) and in a settle (``follow_on``)."""
+    """Count the moves the follow-on's fast path starts: at an instant's ends (``"ends"``:
+    ``follow_on_until`` at the start of an advance, for the instants up to its time that are
+    nothing else, or ``ends_that_follow_on`` before the reactions) and in a settle
+    (``follow_on``). Each move started counts once, an axis that followed on more than once in
+    one advance once (the tests here advance from deadline to deadline)."""
     taken = {"ends": 0, "settle": 0}
     ends, settle = follow_on.ends_that_follow_on, follow_on.follow_on
+    until = follow_on.follow_on_until
 
     def counted_ends(ex: Any, codes: Any, t: float) -> bool:
         axes = ex.machine.axes
@@ -544,6 +592,14 @@ def started(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
         result = ends(ex, codes, t)
         taken["ends"] += sum(a.traj is not b for a, b in zip(axes, before, strict=True))
         return result
+
+    def counted_until(ex: Any, codes: Any, now: float) -> None:
+        axes = ex.machine.axes
+        before = [axis.traj for axis in axes]
+        until(ex, codes, now)
+        taken["ends"] += sum(a.traj is not b for a, b in zip(axes, before, strict=True))
+
+    monkeypatch.setattr(machine_module, "follow_on_until", counted_until)
 
     def counted_settle(*args: Any) -> bool:
         result = settle(*args)
