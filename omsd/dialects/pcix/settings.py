@@ -122,8 +122,17 @@ def _db(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("LH", "LL")
 def _lh(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    value = cmd.mnemonic == "LH"
-    apply_to(ix, cmd, cell, flag_axes(ix, cmd), setter("limit_high", value), t)
+    high = cmd.mnemonic == "LH"
+
+    def apply(axis: Axis, t: float) -> None:
+        # the lines read the other way from now on: a moving axis looks at them on this sample
+        # (a line that now reads true stops it, LN: "if the axis encounters a limit switch in
+        # the course of executing any motion, the axis will be instructed to stop")
+        axis.limit_high = high
+        axis.sensor_check = t
+        axis.invalidate()
+
+    apply_to(ix, cmd, cell, flag_axes(ix, cmd), apply, t)
 
 
 @handles("HH", "HL")

@@ -1,0 +1,53 @@
+"""Limit switches, stops and kills and the flags they leave, a second review on the four boards
+(2026-11-27). Each test quotes what it checks; where a manual is silent the choice is in
+``docs/decisions.md`` ("Switches and the simulated world", "Flags and registers").
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from omsd.board.events import LimitEvent
+from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
+from omsd.engine.registers import OVRT
+from omsd.engine.world import LimitWiring
+
+#: Normally open limit switches far out; the home switch out of the way.
+OPEN = AxisWorld(
+    home_low=5_000_000.0, home_high=5_000_100.0, limit_switches=LimitWiring.NORMALLY_OPEN
+)
+#: ... and normally closed ones (grounded until hit: a limit for LH, none for LL).
+CLOSED = OPEN.with_changes(limit_switches=LimitWiring.NORMALLY_CLOSED)
+
+
+def limits(h: Harness) -> list[tuple[str, int]]:
+    return [(e.axis, e.direction) for e in h.events() if isinstance(e, LimitEvent)]
+
+
+@pytest.mark.parametrize(("world", "level"), [(OPEN, "LH"), (CLOSED, "LL")])
+def test_a_limit_level_that_makes_the_line_true_stops_a_running_jog(
+    world: AxisWorld, level: str
+) -> None:
+    """PCIx LH: "This command allows TTL logic high to be treated as the 'true' state"; LN:
+    "if the axis encounters a limit switch in the course of executing any motion, the axis will
+    be instructed to stop and the host will be notified of the event"; §5.5.4: "When a limit is
+    encountered, the axis involved will cease motion and flush any pending motion commands".
+    A jog has left its queue, so a queued LH (LL) runs while it moves. With the switches wired
+    the other way the line, away from the switch, now reads true: QA said ``PNLN`` at once, but
+    the jog ran on (``RP`` 9975 at 1 s) with no limit and no OVRT. It stops on the next sample."""
+    h = Harness("PCIX-400", world={"X": world})
+    if level == "LL":
+        h.send("AX;LH;")
+    h.send("AX;VL10000;JG10000;")
+    h.until(0.1)
+    assert h.send("QA;") == b"PNNN\n\r"
+    h.send(level + ";")
+    h.until(1.0)
+    assert limits(h) == [("X", 1)]
+    assert h.position("X") <= 1000 + 10  # stopped within a sample of the LH (5 steps a sample)
+    assert h.send("RV;") == b"0\n\r"
+    assert h.board.read_status_register(h.t) & OVRT
+    h.send("JG-10000;")  # moving the other way, the line true there too: stopped again
+    h.until(1.1)
+    assert limits(h) == [("X", -1)]
