@@ -87,21 +87,11 @@ def test_record_then_replay_on_the_command_line(
     assert lines[0]["kind"] == "header" and lines[0]["model"] == "PC48-4E"
     assert lines[0]["link"] == "driver"  # the default with tcp:
     assert lines[-1] == {"t": lines[-1]["t"], "kind": "info", "message": "stopped"}
-    replay = subprocess.run(
-        [sys.executable, "-m", "omsd.recording", "replay", str(log)],
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT,
-    )
+    replay = recording_run("replay", str(log))
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert replay.stdout.startswith("no differences: 3 answers and 1 marker over ")
     other = ["--json", "--model", "VS4-040"]
-    replay = subprocess.run(
-        [sys.executable, "-m", "omsd.recording", "replay", str(log), *other],
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT,
-    )
+    replay = recording_run("replay", str(log), *other)
     assert replay.returncode == 1  # a VS4 answers WY otherwise
     report = json.loads(replay.stdout)
     assert report["model"] == "VS4-040" and report["differences"][0]["command"] == "WY"
@@ -187,18 +177,23 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize(("args", "message"), BAD, ids=[m for _, m in BAD])
-def test_what_keeps_it_from_starting_is_one_line_and_status_2(
-    tmp_path: Path, args: list[str], message: str
-) -> None:
-    log = tmp_path / "run.jsonl"
-    result = subprocess.run(
-        [sys.executable, "-m", "omsd.recording", "record", *args, "--log", str(log)],
+def recording_run(*args: str) -> subprocess.CompletedProcess[str]:
+    """``python -m omsd.recording ARGS``, run to its end with nothing on standard input."""
+    return subprocess.run(
+        [sys.executable, "-m", "omsd.recording", *args],
         capture_output=True,
         text=True,
         timeout=TIMEOUT,
         stdin=subprocess.DEVNULL,
     )
+
+
+@pytest.mark.parametrize(("args", "message"), BAD, ids=[m for _, m in BAD])
+def test_what_keeps_it_from_starting_is_one_line_and_status_2(
+    tmp_path: Path, args: list[str], message: str
+) -> None:
+    log = tmp_path / "run.jsonl"
+    result = recording_run("record", *args, "--log", str(log))
     assert result.returncode == 2
     assert result.stdout == ""
     assert message in result.stderr
@@ -267,13 +262,7 @@ def test_the_help_quotes_the_recorders_default_linger() -> None:
 
 def test_a_replay_of_a_device_is_one_line_and_status_2() -> None:
     # omsd replay /dev/zero used to read without end (and without bound of memory)
-    result = subprocess.run(
-        [sys.executable, "-m", "omsd.recording", "replay", "/dev/zero"],
-        capture_output=True,
-        text=True,
-        timeout=TIMEOUT,
-        stdin=subprocess.DEVNULL,
-    )
+    result = recording_run("replay", "/dev/zero")
     assert result.returncode == 2
     assert result.stdout == ""
     assert result.stderr == "omsd replay: /dev/zero: not a recording: a device, not a file\n"
