@@ -307,6 +307,14 @@ class AxisState:
         self.traj = pf.rebased(self.traj, t, value - x)
         self.invalidate()
 
+    def command_at(self, t: float, value: float) -> None:
+        """Command a servo at rest to ``value`` at ``t``, where its motor is: the position
+        register and the carriage go there together (the switches see the commanded position,
+        which a closed loop follows), unlike ``load_counter``, which relabels the carriage."""
+        self.servo_sync(t)
+        self.traj = pf.rebased(self.traj, t, value - self.traj.position(t))
+        self.invalidate()
+
     # -- encoder ------------------------------------------------------------------------------
 
     def encoder(self, t: float) -> int:

@@ -165,11 +165,13 @@ def _hf(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 def _hn(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if axis.servo is not None:
         # "HN ... will close the loop and enable the PID". Closing is bumpless: an axis at
-        # rest is commanded to hold where its motor is (an open loop may have drifted)
+        # rest is commanded to hold where its motor is (an open loop may have drifted, or run
+        # its commanded position on without the motor), and the stage, switches and all, is
+        # where the motor is
         loop = axis.servo
         axis.servo_sync(t)
         if not loop.closed and axis.motion is Motion.IDLE:
-            axis.load_counter(t, float(loop.encoder_counts))
+            axis.command_at(t, float(loop.encoder_counts))
             loop.set_position(loop.position)
         loop.closed = True
         axis.servo_trip_reported = False

@@ -20,8 +20,11 @@ servo's loop opened by a limit, and EA's slip letter. Every reply is read as the
 low limit and ``i + 8`` high limit, exclusive-or'ed with "LT? said =l"; EA's third character
 ``S``).
 
-None of these failed when the file was written: omsd already did what the PCIx manual says in
-each case. They pin the answers so that a later change shows.
+All but the last test passed when the file was written: omsd already did what the PCIx manual
+says there, and they pin the answers so that a later change shows. The last one found that
+closing a servo's loop (HN, which the client sends before each move) after the commanded position
+had run on with the loop open (the client's jog and home do not close it) left the limit and home
+switches that far from the motor for good (``docs/decisions.md``, "The PCIx", "Servo").
 """
 
 from __future__ import annotations
@@ -324,3 +327,39 @@ def test_ea_reports_a_slip_once_and_the_poll_resets_it() -> None:
     assert poll(h).EA[0][2] == "N"
     _, done = polls_until_done(h)
     assert done.PP[0] == 4000 and done.PE[0] < 4000
+
+
+# -- a servo's loop closed after motion with it open ----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "line",
+    [b"AX AC20000; VB0; VL5000; MA1050; GO ID\n", b"AX AC20000; VL500; HM; MA0 GO ID\n"],
+)
+def test_closing_a_servo_loop_keeps_the_switches_where_the_motor_is(line: bytes) -> None:
+    """A PCIX-400 powers up with its loops open (HF: "This is the default mode at power up or
+    reset"; "open the loop and turn off the PID"). omsMAXnet's jog (``"A%1c AC%d; JG%d;"``) and
+    home do not close the loop, its move does (``"A? HN"`` first). A jog and a stop with the loop
+    open run the commanded position (RP, "the motor's commanded position") to 2500 while the
+    motor, undriven, stays at RE 0 ("the motor's actual position"). HN then commands the motor
+    to hold where it is: RP becomes 0 with RE. The switches are on the stage, which is where the
+    motor is: the home switch (1000..1100 from power-up) is at RE 1000 as before, so a move to
+    1050 ends on it (RI ``H``) and a home search from 0 finds it 1000 counts on.
+
+    Until this review HN kept the switches where the commanded position had been (2500) and
+    gave that place the motor's count: the stage read 2500 counts beyond its encoder for good,
+    the move to 1050 ended at ``PDNN`` and the home search ran on towards the far limit."""
+    h = Harness("PCIX-400")
+    h.send("AX AC20000; JG5000;\n")
+    h.advance(0.5)
+    h.send("AX AC20000; ST ID;\n")
+    h.advance(0.5)
+    assert receive(h, "AX RP") == "2500" and receive(h, "AX RE") == "0"
+    assert receive(h, "AM;RI;")[:4] == "PDNN"
+    h.send("AX HN\n")
+    assert receive(h, "AX RP") == "0" and receive(h, "AX RE") == "0"
+    h.send(line)
+    _, done = polls_until_done(h, limit=10.0)
+    assert done.RI[0] in ("PDNH", "MDNH"), done
+    target = 1050 if b"MA1050" in line else 0
+    assert done.PP[0] == target and abs(done.PE[0] - target) <= 3, done
