@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from omsd.engine import profiles as pf
-from omsd.engine.axis_state import SERVO_CHECK, AxisState, steps
+from omsd.engine.axis_state import SERVO_CHECK, AxisState, counted
 from omsd.engine.gearing import moved
 from omsd.engine.sensing import first_look_needed, next_event
 from omsd.engine.states import HomeSearch, Motion, Pending, Wait
@@ -80,7 +80,7 @@ class Axis(AxisState):
         self.servo_sync(t)
         self.note_direction(t)
         x = self.traj.position(t)
-        self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
+        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x)))
         self.motion = Motion.IDLE
         self.limit_ramp = False
         self.invalidate()
@@ -94,7 +94,7 @@ class Axis(AxisState):
         self.servo_sync(t)
         self.note_direction(t)
         x = self.traj.position(t)
-        self.traj = Trajectory.at_rest(t, float(steps(x, self.traj.x0)))
+        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x)))
         self.motion = Motion.IDLE
         self.limit_ramp = False
         self.home = None

@@ -270,7 +270,7 @@ class AxisState:
     def counter(self, t: float) -> int:
         """The position register: whole steps emitted so far."""
         x = self.traj.position(t)
-        return math.floor(x + 0.5) if self.motion is _IDLE else steps(x, self.traj.x0)
+        return math.floor(x + 0.5) if self.motion is _IDLE else counted(self.traj, x)
 
     def velocity(self, t: float) -> float:
         return self.traj.velocity(t)
@@ -292,7 +292,7 @@ class AxisState:
             return self.stall_phys
         x = self.traj.position(t)
         if self.motion is not _IDLE:
-            x = float(steps(x, self.traj.x0))
+            x = float(counted(self.traj, x))
         return x + self.phys_offset
 
     @property
@@ -472,3 +472,14 @@ def steps(x: float, origin: float) -> int:
     steps in the direction of travel, never rounded ahead."""
     eps = 1e-6
     return math.floor(x + eps) if x >= origin else math.ceil(x - eps)
+
+
+def counted(traj: Trajectory, x: float) -> int:
+    """The position counter at ``x`` on ``traj``: :func:`steps` from where it began. At its
+    start (``x`` there exactly, a motion begun between two steps by a stop or a new jog) the
+    way is the one it leaves in, not the positive one: a stop of a motion the negative way at
+    -40.12 counts -40, as the motion it took over did, not a step ahead (-41)."""
+    origin = traj.x0
+    if x == origin and (traj.velocity(traj.t0) or traj.acceleration(traj.t0)) < 0.0:
+        return math.ceil(x - 1e-6)
+    return steps(x, origin)

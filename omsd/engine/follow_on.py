@@ -31,7 +31,7 @@ import math
 from collections.abc import Collection
 
 from omsd.engine.axis import Axis
-from omsd.engine.axis_state import steps
+from omsd.engine.axis_state import counted
 from omsd.engine.core import Core
 from omsd.engine.executor import Executor
 from omsd.engine.gearing import followed
@@ -105,7 +105,7 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
         if not _ends_plainly(axis, t):
             return False
         traj = axis.traj
-        x = float(steps(traj.position(t), traj.x0))  # (Axis.settle: on a whole step)
+        x = float(counted(traj, traj.position(t)))  # (Axis.settle: on a whole step)
         start = _next_move(machine, axis, codes, tick, x)
         if start is None:
             return False

@@ -278,3 +278,23 @@ def test_pm_is_answered_on_every_pcix_axis(model: str) -> None:
         h.send("AX;HV1000;HG10;HN;")
         h.run()
         assert h.send("AX;?PM;") == b"hn\n\r"
+
+
+@pytest.mark.parametrize("model", PC48_FAMILY)
+def test_pc68_stop_read_at_once_counts_no_step_ahead(model: str) -> None:
+    """A stop and a read in one write (``AX ST RP``, or drvOmsPC68's ``AC1800 ST ID`` with its
+    ``AX QA RP`` poll in the same instant) while the axis runs the negative way between two
+    steps. RP: "returns the current position"; the counter counts the steps emitted ("the
+    position counter may not accurately reflect the true position of the motor following this
+    command" is said of KL's inertia, §6.9, not of the pulses). At 0.2003 s a jog at -1000 from
+    AC2000 is at -40.12: 40 steps emitted, RP -40. The ST began a ramp down from there and the
+    counter read -41 at that instant (the new ramp's start taken as travel the positive way,
+    rounded down), then -40 a sample later and on: a step counted that was never emitted. A KL in
+    the same instant (``AX ST KL``) kept it for good."""
+    c = Client(model)
+    c.send(b"AX AC2000 JG-1000;")
+    assert c.send(b"AX RP", 0.2003) == b"\n\r-40\n\r"
+    assert c.send(b"AX ST RP") == b"\n\r-40\n\r"
+    assert c.send(b"AX KL RP") == b"\n\r-40\n\r"
+    c.wait(0.5)
+    assert pc68_poll(c, 0.5) == ("MNNN", -40)
