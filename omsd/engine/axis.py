@@ -80,7 +80,7 @@ class Axis(AxisState):
         self.servo_sync(t)
         self.note_direction(t)
         x = self.traj.position(t)
-        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x)))
+        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x, t)))
         self.motion = Motion.IDLE
         self.limit_ramp = False
         self.invalidate()
@@ -94,7 +94,7 @@ class Axis(AxisState):
         self.servo_sync(t)
         self.note_direction(t)
         x = self.traj.position(t)
-        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x)))
+        self.traj = Trajectory.at_rest(t, float(counted(self.traj, x, t)))
         self.motion = Motion.IDLE
         self.limit_ramp = False
         self.home = None

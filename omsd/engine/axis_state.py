@@ -270,7 +270,7 @@ class AxisState:
     def counter(self, t: float) -> int:
         """The position register: whole steps emitted so far."""
         x = self.traj.position(t)
-        return math.floor(x + 0.5) if self.motion is _IDLE else counted(self.traj, x)
+        return math.floor(x + 0.5) if self.motion is _IDLE else counted(self.traj, x, t)
 
     def velocity(self, t: float) -> float:
         return self.traj.velocity(t)
@@ -292,7 +292,7 @@ class AxisState:
             return self.stall_phys
         x = self.traj.position(t)
         if self.motion is not _IDLE:
-            x = float(counted(self.traj, x))
+            x = float(counted(self.traj, x, t))
         return x + self.phys_offset
 
     @property
@@ -474,12 +474,26 @@ def steps(x: float, origin: float) -> int:
     return math.floor(x + eps) if x >= origin else math.ceil(x - eps)
 
 
-def counted(traj: Trajectory, x: float) -> int:
-    """The position counter at ``x`` on ``traj``: :func:`steps` from where it began. At its
-    start (``x`` there exactly, a motion begun between two steps by a stop or a new jog) the
-    way is the one it leaves in, not the positive one: a stop of a motion the negative way at
-    -40.12 counts -40, as the motion it took over did, not a step ahead (-41)."""
+def counted(traj: Trajectory, x: float, t: float) -> int:
+    """The position counter at ``x``, at ``t`` on ``traj``: the steps emitted, whole steps the
+    way the axis travels (:func:`steps` from where the motion began). At its start (``x``
+    there exactly: a motion begun between two steps by a stop or a new jog) the way is the one
+    it leaves in, not the positive one: a stop of a motion the negative way at -40.12 counts
+    -40, as the motion it took over did, not a step ahead (-41). After a turn within the motion
+    (a jog turned round by one of the other sign) the steps of the way back are counted from
+    the step the turn was on: turned at -500 and back up at -488.975, -489."""
     origin = traj.x0
-    if x == origin and (traj.velocity(traj.t0) or traj.acceleration(traj.t0)) < 0.0:
+    if traj.turns:
+        way = traj.way
+        now = traj.velocity(t)
+        if now == 0.0 and traj.t0 < t:  # at the end: the way it came
+            now = traj.velocity(max(traj.t0, min(t, traj.end_time) - 1e-9))
+        if now * way < 0.0 and (turned := traj.turn(t, way)) is not None:
+            at_turn = steps(turned, origin)
+            eps = 1e-6
+            return (
+                max(at_turn, math.floor(x + eps)) if now > 0.0 else min(at_turn, math.ceil(x - eps))
+            )
+    if x == origin and traj.way < 0.0:
         return math.ceil(x - 1e-6)
     return steps(x, origin)

@@ -105,7 +105,7 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
         if not _ends_plainly(axis, t):
             return False
         traj = axis.traj
-        x = float(counted(traj, traj.position(t)))  # (Axis.settle: on a whole step)
+        x = float(counted(traj, traj.position(t), t))  # (Axis.settle: on a whole step)
         start = _next_move(machine, axis, codes, tick, x)
         if start is None:
             return False

@@ -38,6 +38,7 @@ class Trajectory:
         "_extent",
         "_offsets",
         "_starts",
+        "_turns",
         "duration",
         "end_time",
         "final",
@@ -71,6 +72,7 @@ class Trajectory:
         self.final = final
         self._extent: tuple[float, float] | None = None
         self._course: Course | None = None
+        self._turns: bool | None = None
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
@@ -96,6 +98,7 @@ class Trajectory:
         traj.final = final
         traj._extent = None
         traj._course = course
+        traj._turns = None
         return traj
 
     @property
@@ -126,6 +129,48 @@ class Trajectory:
     def acceleration(self, t: float) -> float:
         i, tau = self._locate(t)
         return 0.0 if i < 0 else self.pieces[i].a(tau)
+
+    @property
+    def way(self) -> float:
+        """The way the motion leaves its start in: its first velocity, or acceleration from
+        rest (0.0: at rest, or a wait before it moves)."""
+        if not self.pieces:
+            return 0.0
+        first = self.pieces[0]
+        return first.v(0.0) or first.a(0.0)
+
+    @property
+    def turns(self) -> bool:
+        """Whether the travel goes against :attr:`way` somewhere (a jog turned round)."""
+        if self._turns is None:
+            way = self.way
+            self._turns = bool(way) and any(
+                p.v(p.duration if math.isfinite(p.duration) else 0.0) * way < 0.0
+                or p.v(0.0) * way < 0.0
+                for p in self.pieces
+            )
+        return self._turns
+
+    def turn(self, t: float, way: float) -> float | None:
+        """Where the travel that began the ``way`` way (its sign) turned round before ``t``: the
+        position at which the velocity first went against it (a jog turned round by one of
+        the other sign); None if it has not."""
+        last, tau_t = self._locate(t)
+        if last < 0:
+            last, tau_t = len(self.pieces) - 1, self.pieces[-1].duration if self.pieces else 0.0
+        for i, piece in enumerate(self.pieces[: last + 1]):
+            end = piece.duration if i < last else tau_t
+            if piece.v(end) * way >= 0.0:
+                continue
+            lo, hi = 0.0, end  # the way's travel ends in [lo, hi]
+            for _ in range(64):
+                mid = (lo + hi) / 2.0
+                if piece.v(mid) * way > 0.0:
+                    lo = mid
+                else:
+                    hi = mid
+            return self._offsets[i] + piece.x(lo)
+        return None
 
     def moving_at(self, t: float) -> bool:
         return self.t0 <= t < self.end_time and bool(self.pieces)

@@ -298,3 +298,19 @@ def test_pc68_stop_read_at_once_counts_no_step_ahead(model: str) -> None:
     assert c.send(b"AX KL RP") == b"\n\r-40\n\r"
     c.wait(0.5)
     assert pc68_poll(c, 0.5) == ("MNNN", -40)
+
+
+@pytest.mark.parametrize("model", PC48_FAMILY)
+def test_pc68_counter_after_a_turn_counts_the_steps_emitted(model: str) -> None:
+    """A jog turned round by a jog of the other sign (JG: "another JG command"; omsd ramps down
+    through zero and up the other way), as drvOmsPC68's ``HM0`` sent while its ``JG-1000`` runs
+    turns it round: after the turn RP counts the steps emitted the new way. ``JG-1000`` at
+    AC2000, then ``JG1000``: the axis turns at -500 at 1.0 s and is at -488.975 at 1.105 s,
+    eleven steps up from -500: RP -489. It read -488 (the step ahead, as if still travelling the
+    way the motion began), and a KL there (as a limit would) kept -488 for good."""
+    c = Client(model)
+    c.send(b"AX AC2000 JG-1000;")
+    c.send(b"AX JG1000;", 0.3)
+    assert c.send(b"AX RP", 1.105) == b"\n\r-489\n\r"
+    assert c.send(b"AX KL RP") == b"\n\r-489\n\r"
+    assert pc68_poll(c, 1.5) == ("PNNN", -489)
