@@ -169,7 +169,7 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
             if not _ends_plainly(axis, t):
                 break
             traj = axis.traj
-            x = float(steps(traj.position(t), traj.x0))  # (Axis.settle: on a whole step)
+            x = float(counted(traj, traj.position(t), t))  # (Axis.settle: on a whole step)
             machine.now = max(machine.now, t)  # (as Machine.advance, before the instant's events)
             start = _next_move(machine, axis, codes, tick, x, gears=False)
             if start is None:

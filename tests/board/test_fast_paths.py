@@ -329,6 +329,9 @@ def test_a_polled_board_in_motion_says_the_same(model: str) -> None:
         "MR3000;GO;MR-3000;GO;ID;MR3000;GO;MR-300;GO;",
         # a timed wait in the queue (an axis waiting for time is not passed by: not taken)
         "MR3000;GO;WT100;MR-3000;GO;MR3000;GO;",
+        # the first move begun from a jog the other way: it turns round on its way, and where
+        # it ends is counted the way it came (axis_state.counted)
+        "JG-3000;MR3000;GO;MR-3000;GO;MR3000;GO;MR-3000;GO;",
     ],
 )
 def test_a_board_run_only_when_polled_says_the_same(
