@@ -25,6 +25,10 @@ _BISECT_ITERATIONS = 80
 _REACH_MARGIN = 1e-3
 
 
+#: ``Trajectory._seen`` before any position is found (no time is NaN).
+_NOT_SEEN = (math.nan, math.nan)
+
+
 class Trajectory:
     """Position of one axis as a function of time: ``x0`` at ``t0``, then the pieces in turn.
 
@@ -37,6 +41,7 @@ class Trajectory:
         "_course",
         "_extent",
         "_offsets",
+        "_seen",
         "_starts",
         "_turns",
         "duration",
@@ -73,6 +78,7 @@ class Trajectory:
         self._extent: tuple[float, float] | None = None
         self._course: Course | None = None
         self._turns: bool | None = None
+        self._seen = _NOT_SEEN
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
@@ -98,7 +104,8 @@ class Trajectory:
         traj.final = final
         traj._extent = None
         traj._course = course
-        traj._turns = None
+        traj._turns = course.turns
+        traj._seen = _NOT_SEEN
         return traj
 
     @property
@@ -119,8 +126,15 @@ class Trajectory:
             return self.x0
         if t >= self.end_time:
             return self.final
+        # the last position found, kept (issue 16): a poll asks for one instant's position more
+        # than once (QA's carriage, RP's counter), and a trajectory never changes
+        seen = self._seen
+        if seen[0] == t:
+            return seen[1]
         i, tau = self._locate(t)
-        return self._offsets[i] + self.pieces[i].x(tau)
+        x = self._offsets[i] + self.pieces[i].x(tau)
+        self._seen = (t, x)
+        return x
 
     def velocity(self, t: float) -> float:
         i, tau = self._locate(t)
@@ -134,21 +148,14 @@ class Trajectory:
     def way(self) -> float:
         """The way the motion leaves its start in: its first velocity, or acceleration from
         rest (0.0: at rest, or a wait before it moves)."""
-        if not self.pieces:
-            return 0.0
-        first = self.pieces[0]
-        return first.v(0.0) or first.a(0.0)
+        return _way(self.pieces)
 
     @property
     def turns(self) -> bool:
-        """Whether the travel goes against :attr:`way` somewhere (a jog turned round)."""
+        """Whether the travel goes against :attr:`way` somewhere (a jog turned round). Found
+        once (a course's own, for a trajectory along one)."""
         if self._turns is None:
-            way = self.way
-            self._turns = bool(way) and any(
-                p.v(p.duration if math.isfinite(p.duration) else 0.0) * way < 0.0
-                or p.v(0.0) * way < 0.0
-                for p in self.pieces
-            )
+            self._turns = _turns(self.pieces)
         return self._turns
 
     def turn(self, t: float, way: float) -> float | None:
@@ -260,6 +267,23 @@ class Trajectory:
         return points
 
 
+def _way(pieces: Sequence[Piece]) -> float:
+    """:attr:`Trajectory.way` of ``pieces``."""
+    if not pieces:
+        return 0.0
+    first = pieces[0]
+    return first.v(0.0) or first.a(0.0)
+
+
+def _turns(pieces: Sequence[Piece]) -> bool:
+    """:attr:`Trajectory.turns` of ``pieces``."""
+    way = _way(pieces)
+    return bool(way) and any(
+        p.v(p.duration if math.isfinite(p.duration) else 0.0) * way < 0.0 or p.v(0.0) * way < 0.0
+        for p in pieces
+    )
+
+
 def _bounds(
     x0: float, offsets: list[float], points: list[tuple[float, ...]], final: float | None
 ) -> tuple[float, float]:
@@ -308,7 +332,7 @@ class Course:
     are those ``Trajectory`` computes, in the same order: the same results to the last bit
     (``tests/board/test_fast_paths.py``)."""
 
-    __slots__ = ("duration", "extremes", "pieces", "spans", "starts", "steps")
+    __slots__ = ("duration", "extremes", "pieces", "spans", "starts", "steps", "turns")
 
     def __init__(self, pieces: Sequence[Piece]) -> None:
         self.pieces = tuple(p for p in pieces if p.duration > 0.0)
@@ -327,6 +351,7 @@ class Course:
         self.steps = steps
         self.extremes = extremes
         self.spans = [(min(xs), max(xs)) for xs in extremes]  # (Trajectory.extent, _spans)
+        self.turns = _turns(self.pieces)  # (Trajectory.turns)
         self.duration = t
 
 
