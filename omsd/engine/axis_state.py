@@ -379,6 +379,17 @@ class AxisState:
         low = hit if wiring is _NORMALLY_OPEN else not hit
         return (not low) if self.limit_high else low
 
+    def look_at_sensors(self, t: float) -> None:
+        """The sensors are to be looked at on the sample of ``t`` (how they read, or what is
+        looked for, has changed): at ``t``, unless a look is already asked for after it. That
+        is a motion's first look, on the sample it begins on: it sees the change, and a look
+        at ``t``, before the motion, would see no direction and take its place (the axis
+        standing on a switch then ran through it)."""
+        check = self.sensor_check
+        if check is None or check < t:
+            self.sensor_check = t
+        self.invalidate()
+
     def set_travel_limits(self, upper: float, lower: float, t: float) -> None:
         """Soft travel limits, absolute positions; ``0, 0`` switches them off."""
         self.travel_limits = None if upper == 0 and lower == 0 else (lower, upper)

@@ -51,3 +51,28 @@ def test_a_limit_level_that_makes_the_line_true_stops_a_running_jog(
     h.send("JG-10000;")  # moving the other way, the line true there too: stopped again
     h.until(1.1)
     assert limits(h) == [("X", -1)]
+
+
+#: The Y axis standing on its positive limit switch (hit from -10 up), the line true (LL).
+ON_THE_SWITCH = AxisWorld(positive_limit=-10.0, home_low=5_000_000.0, home_high=5_000_100.0)
+
+
+@pytest.mark.parametrize("level", ["", "AY;LL;", "AY;LH;LL;"])
+def test_a_limit_level_command_keeps_the_first_look_of_a_motion_about_to_begin(
+    level: str,
+) -> None:
+    """Found by review: LH/LL ask for a look at the sensors at once, and that look replaced the
+    one a motion begun on the next sample had asked for. Y, geared to X (EG), stands on its
+    positive switch, the line true; X's MR GO starts both on the next sample, and Y's queued LL
+    (which changes nothing) ran at the same instant: its look, before the motion began, saw no
+    direction, and the one on the first sample was gone. Y ran through the switch to 500 with no
+    limit. LN: "if the axis encounters a limit switch in the course of executing any motion, the
+    axis will be instructed to stop and the host will be notified of the event"; it stops on
+    its first sample, with or without the LL."""
+    h = Harness("PCIX-040", world={"Y": ON_THE_SWITCH})
+    h.send("AY;EGX;")
+    h.until(0.0123)  # (between two samples)
+    h.send("AX;VL1000;MR500;GO;" + level)
+    h.until(1.0)
+    assert limits(h) == [("Y", 1)]
+    assert h.send("AA;RP;") == b"500,0,0,0\n\r"

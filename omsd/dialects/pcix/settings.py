@@ -129,8 +129,7 @@ def _lh(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         # (a line that now reads true stops it, LN: "if the axis encounters a limit switch in
         # the course of executing any motion, the axis will be instructed to stop")
         axis.limit_high = high
-        axis.sensor_check = t
-        axis.invalidate()
+        axis.look_at_sensors(t)
 
     apply_to(ix, cmd, cell, flag_axes(ix, cmd), apply, t)
 
