@@ -393,8 +393,7 @@ class AxisState:
     def set_travel_limits(self, upper: float, lower: float, t: float) -> None:
         """Soft travel limits, absolute positions; ``0, 0`` switches them off."""
         self.travel_limits = None if upper == 0 and lower == 0 else (lower, upper)
-        self.sensor_check = t
-        self.invalidate()
+        self.look_at_sensors(t)
 
     def beyond_travel_limit(self, direction: int, t: float) -> bool:
         """Travel-limit overtravel in ``direction``, for the motions the limits apply to."""

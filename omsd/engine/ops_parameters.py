@@ -73,8 +73,7 @@ def _hl(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
 
 def _ln(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     axis.limits_on = True
-    axis.sensor_check = t
-    axis.invalidate()
+    axis.look_at_sensors(t)
     return None
 
 
@@ -192,8 +191,7 @@ def _is(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     if not axis.slip_detect and not axis.hold:
         axis.anchor_tracking(t)
     axis.slip_detect = True
-    axis.sensor_check = t
-    axis.invalidate()
+    axis.look_at_sensors(t)
     return None
 
 

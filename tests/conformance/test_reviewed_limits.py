@@ -76,3 +76,23 @@ def test_a_limit_level_command_keeps_the_first_look_of_a_motion_about_to_begin(
     h.until(1.0)
     assert limits(h) == [("Y", 1)]
     assert h.send("AA;RP;") == b"500,0,0,0\n\r"
+
+
+@pytest.mark.parametrize("command", ["LN;", "TL100000,-100000;", "IS;"])
+def test_a_command_that_asks_for_a_look_keeps_the_first_look_of_a_motion_about_to_begin(
+    command: str,
+) -> None:
+    """The same as LH/LL's (above), for the other commands that ask for a look at once: Y,
+    geared to X, its switches off (LF), stands on its positive switch; X's MR GO starts both on
+    the next sample, and Y's queued LN (the switches on again), then TL (travel limits far
+    away) or IS (slip detection on), ran at the same instant. Their look came before the motion
+    and took the place of the first sample's: Y ran through the switch to 500. LN: "if the axis
+    encounters a limit switch in the course of executing any motion, the axis will be
+    instructed to stop"."""
+    h = Harness("PCIX-040", world={"Y": ON_THE_SWITCH})
+    h.send("AY;LF;EGX;")
+    h.until(0.0123)
+    h.send("AX;VL1000;MR500;GO;AY;LN;" + ("" if command == "LN;" else command))
+    h.until(1.0)
+    assert limits(h) == [("Y", 1)]
+    assert h.send("AA;RP;") == b"500,0,0,0\n\r"
