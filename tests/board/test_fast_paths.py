@@ -1046,3 +1046,42 @@ def test_the_engine_keeps_its_attributes_in_slots(model: str) -> None:
         assert vars(axis) == {}, (model, axis.letter)
     assert set(vars(board)) <= BOARD_OWN, sorted(set(vars(board)) - BOARD_OWN)
     assert set(vars(board.interpreter)) <= PCIX_OWN, sorted(set(vars(board.interpreter)) - PCIX_OWN)
+
+
+def test_a_board_run_rarely_with_input_waiting_for_room_says_the_same(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Found by review (a mutation of ``follow_on_until`` no test saw): X's queue is full of
+    moves, and the input buffer holds what waits for its room, another axis's ``ID`` behind it.
+    The straightforward way reads the buffer in the settle of every instant a move of X ends
+    (the room it made), so Y's ``ID`` is done at the end of X's first move; a board run only
+    every 3 s must not take those instants together before reading (``holds_nothing``)."""
+    taken = started(monkeypatch)
+    twin = Twin(get_model("PC48-4"))
+    rest = b"AX;VL5000;AC50000;" + b"MR300;GO;MR-300;GO;" * 40 + b"AY;ID;AX;MR1;GO;"
+    now = 0.0
+    while rest:
+        rest = rest[twin.receive(rest, now, 1) :]
+        now += 3.0
+        twin.advance(now)
+    while (d := twin.next_deadline()) is not None:
+        twin.advance(now := max(now + 3.0, d))
+    assert taken["ends"] + taken["settle"] > 0
+
+
+def test_moves_that_follow_on_from_between_two_steps_say_the_same(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Found by review (a mutation of ``follow_on_until`` no test saw): a move begun while the
+    axis jogs starts between two steps; the moves after it start each where the last came to
+    rest, on a whole step (``Axis.settle``), also when a board run only every 3 s takes their
+    instants together."""
+    taken = started(monkeypatch)
+    twin = Twin(get_model("PC48-4"))
+    twin.receive(b"AY;VL5000;AC50000;JG-363;", 0.0, 1)
+    twin.receive(b"AY;MR67;GO;MR-618;GO;MR737;GO;MR-5;GO;", 0.3, 1)
+    twin.advance(0.31)  # (the move's first look: it ends at -40.69, a step short of -41)
+    assert twin.fast.axes[1].traj.final % 1.0
+    for now in (3.0, 6.0):
+        twin.receive(b"AY QA RP;", now, 1)
+    assert taken["ends"] == 2  # (one axis, in each of the two advances)
