@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 
 from omsd.engine import profiles as pf
-from omsd.engine.axis_state import SERVO_CHECK, AxisState, counted
+from omsd.engine.axis_state import SERVO_CHECK, AxisState
+from omsd.engine.counter import counted
 from omsd.engine.gearing import moved
 from omsd.engine.sensing import first_look_needed, next_event
 from omsd.engine.states import HomeSearch, Motion, Pending, Wait

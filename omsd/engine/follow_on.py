@@ -31,8 +31,8 @@ import math
 from collections.abc import Collection
 
 from omsd.engine.axis import Axis
-from omsd.engine.axis_state import counted
 from omsd.engine.core import Core
+from omsd.engine.counter import counted
 from omsd.engine.executor import Executor
 from omsd.engine.gearing import followed
 from omsd.engine.queue import Op

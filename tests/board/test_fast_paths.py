@@ -330,7 +330,7 @@ def test_a_polled_board_in_motion_says_the_same(model: str) -> None:
         # a timed wait in the queue (an axis waiting for time is not passed by: not taken)
         "MR3000;GO;WT100;MR-3000;GO;MR3000;GO;",
         # the first move begun from a jog the other way: it turns round on its way, and where
-        # it ends is counted the way it came (axis_state.counted)
+        # it ends is counted the way it came (omsd.engine.counter)
         "JG-3000;MR3000;GO;MR-3000;GO;MR3000;GO;MR-3000;GO;",
     ],
 )
