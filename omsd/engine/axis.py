@@ -62,7 +62,10 @@ class Axis(AxisState):
         else:
             if not moving_before:
                 prefix = [pf.cruise(0.0, t - now)] if t > now else []
-            self.traj = Trajectory(now, x_now, [*prefix, *pieces], final)
+            # taking over from a motion, the count goes on from that motion's (which may have
+            # come either way to a position between two steps); from rest, from the position
+            count = None if from_rest else self.counter(now)
+            self.traj = Trajectory(now, x_now, [*prefix, *pieces], final, count)
             self.motion = motion
             self.limit_ramp = keep_ramp
             if motion is not Motion.HOLD:

@@ -17,24 +17,43 @@ def steps(x: float, origin: float) -> int:
 
 def counted(traj: Trajectory, x: float, t: float) -> int:
     """The position counter at ``x``, at ``t`` on ``traj``: the steps emitted, whole steps the
-    way the axis travels (:func:`steps` from where the motion began). At its start (``x``
-    there exactly: a motion begun between two steps by a stop or a new jog) the way is the one
-    it leaves in, not the positive one: a stop of a motion the negative way at -40.12 counts
-    -40, as the motion it took over did, not a step ahead (-41). After a turn within the motion
-    (a jog turned round by one of the other sign) the steps of the way back are counted from
-    the step the turn was on: turned at -500 and back up at -488.975, -489."""
-    origin = traj.x0
+    way the axis travels, so that the counter moves with the axis and never ahead of it. A
+    trajectory that took over from a motion (``traj.count``) counts on from that motion's
+    count, whichever way it had come: a stop just after a turn at 700.195, at 700.099, counts
+    700 (not 701); a move up from a jog down that reached -150.278 counts -150 (not -151).
+    From rest the count begins at the start rounded the way the motion leaves in (a stop of a
+    motion the negative way at -40.12 counts -40, not -41). After a turn (a jog turned round by
+    one of the other sign, a contour's arc) the steps of the way back are counted from the step
+    the turn was on: turned at -500 and back up at -488.975, -489."""
+    count = traj.count
     if traj.turns:
-        way = traj.way
-        now = traj.velocity(t)
-        if now == 0.0 and traj.t0 < t:  # at the end: the way it came
-            now = traj.velocity(max(traj.t0, min(t, traj.end_time) - 1e-9))
-        if now * way < 0.0 and (turned := traj.turn(t, way)) is not None:
-            at_turn = steps(turned, origin)
-            eps = 1e-6
-            return (
-                max(at_turn, math.floor(x + eps)) if now > 0.0 else min(at_turn, math.ceil(x - eps))
-            )
+        legs = traj.legs(t)
+        if legs:
+            if count is None:
+                count = _onward_from(traj.x0, legs[0][1])
+            for k, (_, way) in enumerate(legs):
+                count = _onward(count, legs[k + 1][0] if k + 1 < len(legs) else x, way)
+            return count
+    if count is not None:
+        return _onward(count, x, traj.way or x - traj.x0)
+    origin = traj.x0
     if x == origin and traj.way < 0.0:
         return math.ceil(x - 1e-6)
     return steps(x, origin)
+
+
+def _onward_from(x: float, way: float) -> int:
+    """The count at ``x`` where a motion from rest leaves the ``way`` way."""
+    eps = 1e-6
+    return math.floor(x + eps) if way > 0.0 else math.ceil(x - eps)
+
+
+def _onward(count: int, x: float, way: float) -> int:
+    """The counter at ``x`` after ``count``, travelling the ``way`` way (its sign) since: it
+    moves on only as whole steps are passed that way."""
+    eps = 1e-6
+    if way > 0.0:
+        return max(count, math.floor(x + eps))
+    if way < 0.0:
+        return min(count, math.ceil(x - eps))
+    return count

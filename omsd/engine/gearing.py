@@ -70,7 +70,8 @@ def follow(slave: AxisState, master: AxisState, now: float) -> None:
         if master.traj.is_finite:
             travel = master.traj.final - master.traj.position(now)
             final = float(math.floor(ideal + gear.ratio * travel + 0.5))
-        slave.traj = pf.Trajectory(now, x, pieces, final)
+        count = None if slave.motion is Motion.IDLE else slave.counter(now)
+        slave.traj = pf.Trajectory(now, x, pieces, final, count)
         slave.motion = Motion.GEAR
         slave.in_position = False
         slave.home = None

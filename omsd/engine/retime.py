@@ -85,7 +85,9 @@ def _retime(axes: list[AxisState], origin: float, velocity: float, t: float) -> 
         pieces = past + replaced[axis.index]
         end = pf.Trajectory(traj.t0, traj.x0, pieces).final
         axis.servo_sync(host.now)
-        axis.traj = pf.Trajectory(traj.t0, traj.x0, pieces, float(math.floor(end + 0.5)))
+        axis.traj = pf.Trajectory(
+            traj.t0, traj.x0, pieces, float(math.floor(end + 0.5)), traj.count
+        )
         axis.outputs = [
             (_retimed(host.clock, when, boundary, factor), action) for when, action in axis.outputs
         ]

@@ -35,6 +35,11 @@ class Trajectory:
     After the last (finite) piece the axis rests at ``final``; it defaults to the sum of the
     displacements but is normally given exactly (an integer step count), so that float noise in
     the pieces never shows in the position counter.
+
+    ``count`` is the position counter at ``t0`` when the trajectory takes over from a motion
+    (the steps that motion had emitted: ``x0`` may lie between two steps, on either side of the
+    count); None when it begins from rest, where the count is ``x0`` rounded the way it leaves
+    in (:func:`omsd.engine.counter.counted`).
     """
 
     __slots__ = (
@@ -44,6 +49,7 @@ class Trajectory:
         "_seen",
         "_starts",
         "_turns",
+        "count",
         "duration",
         "end_time",
         "final",
@@ -53,10 +59,16 @@ class Trajectory:
     )
 
     def __init__(
-        self, t0: float, x0: float, pieces: Sequence[Piece] = (), final: float | None = None
+        self,
+        t0: float,
+        x0: float,
+        pieces: Sequence[Piece] = (),
+        final: float | None = None,
+        count: int | None = None,
     ) -> None:
         self.t0 = t0
         self.x0 = x0
+        self.count = count
         self.pieces = tuple(p for p in pieces if p.duration > 0.0) if pieces else ()
         starts: list[float] = []
         offsets: list[float] = []
@@ -91,6 +103,7 @@ class Trajectory:
         traj = cls.__new__(cls)
         traj.t0 = t0
         traj.x0 = x0
+        traj.count = None
         traj.pieces = course.pieces
         traj._starts = course.starts
         offsets: list[float] = []
@@ -152,32 +165,38 @@ class Trajectory:
 
     @property
     def turns(self) -> bool:
-        """Whether the travel goes against :attr:`way` somewhere (a jog turned round). Found
-        once (a course's own, for a trajectory along one)."""
+        """Whether the travel changes its way somewhere (a jog turned round, a contour's arc).
+        Found once (a course's own, for a trajectory along one)."""
         if self._turns is None:
             self._turns = _turns(self.pieces)
         return self._turns
 
-    def turn(self, t: float, way: float) -> float | None:
-        """Where the travel that began the ``way`` way (its sign) turned round before ``t``: the
-        position at which the velocity first went against it (a jog turned round by one of
-        the other sign); None if it has not."""
-        last, tau_t = self._locate(t)
-        if last < 0:
-            last, tau_t = len(self.pieces) - 1, self.pieces[-1].duration if self.pieces else 0.0
-        for i, piece in enumerate(self.pieces[: last + 1]):
-            end = piece.duration if i < last else tau_t
-            if piece.v(end) * way >= 0.0:
-                continue
-            lo, hi = 0.0, end  # the way's travel ends in [lo, hi]
-            for _ in range(64):
-                mid = (lo + hi) / 2.0
-                if piece.v(mid) * way > 0.0:
-                    lo = mid
-                else:
-                    hi = mid
-            return self._offsets[i] + piece.x(lo)
-        return None
+    def legs(self, t: float) -> list[tuple[float, float]]:
+        """The travel up to ``t`` as legs each one way: where each begins and its way (+1.0 or
+        -1.0), in turn (the ways alternate; nothing before the axis first moves). A leg ends
+        where the velocity changes sign: between two pieces (a jog ramped round through zero,
+        a move begun from rest where a jog the other way was), or within one at its turning
+        points (a ramp through zero, a contour's arc)."""
+        out: list[tuple[float, float]] = []
+        rel = t - self.t0
+        way = 0.0
+        for i, piece in enumerate(self.pieces):
+            start = self._starts[i]
+            if start >= rel:
+                break
+            end = min(piece.duration, rel - start)
+            cuts = [0.0, *(tp for tp in piece.turning_points() if tp < end), end]
+            for a, b in itertools.pairwise(cuts):
+                if b <= a:
+                    continue
+                v = piece.v((a + b) / 2.0)  # (one sign between two turning points)
+                if v == 0.0:
+                    continue
+                sign = 1.0 if v > 0.0 else -1.0
+                if sign != way:
+                    out.append((self._offsets[i] + piece.x(a), sign))
+                    way = sign
+        return out
 
     def moving_at(self, t: float) -> bool:
         return self.t0 <= t < self.end_time and bool(self.pieces)
@@ -276,12 +295,17 @@ def _way(pieces: Sequence[Piece]) -> float:
 
 
 def _turns(pieces: Sequence[Piece]) -> bool:
-    """:attr:`Trajectory.turns` of ``pieces``."""
-    way = _way(pieces)
-    return bool(way) and any(
-        p.v(p.duration if math.isfinite(p.duration) else 0.0) * way < 0.0 or p.v(0.0) * way < 0.0
-        for p in pieces
-    )
+    """:attr:`Trajectory.turns` of ``pieces``: whether their velocity has both signs."""
+    ways: set[bool] = set()
+    for p in pieces:
+        end = p.duration if math.isfinite(p.duration) else 1.0
+        cuts = [0.0, *(tp for tp in p.turning_points() if tp < end), end]
+        for a, b in itertools.pairwise(cuts):
+            if b > a and (v := p.v((a + b) / 2.0)) != 0.0:
+                ways.add(v > 0.0)
+        if len(ways) > 1:
+            return True
+    return False
 
 
 def _bounds(

@@ -132,3 +132,50 @@ def test_pcix_rc_in_a_contour_is_the_whole_number_meant() -> None:
     h.until(0.1)
     assert h.send("RC;") == b"2500, 2500, 0, 0\n\r"
     assert h.errors() == []
+
+
+#: The PC48's CD example at a radius of 100, and a start from where X can reach CV
+CIRCLE = ["AA", "CV200", "CD0,0", "CR0,50,3.1415926", "CR0,0,6.2831853", "MT100,-10", "CE"]
+CIRCLE += ["MT-10,0", "GO", "CX", ""]
+
+#: (when, axis, RP) on the PC48-4's circle below, and where the axis is then
+ON_THE_CIRCLE = [
+    (0.962, "Y", 100),  # Y at 99.015 going down, turned at 100 (between two arcs): 100, not 99
+    (1.748, "X", -99),  # X at -98.998 going up, turned at -100 within the arc: -99, not -98
+    (2.534, "Y", -99),  # Y at -98.981 going up, its second turn (-100): -99, not -98
+    (3.318, "X", 100),  # X at 99.020 going down, its third turn (100): 100, not 50
+    (4.378, "Y", 49),  # Y at 48.994 going down, after the line's turn at 100: 49, not 48
+]
+
+
+@pytest.mark.parametrize("model", ["PC48-4", "VS4-040", "PCIX-004"])
+def test_the_counters_on_a_circle_count_the_steps_emitted_the_way_back(model: str) -> None:
+    """The PC48's CD example (§6.21, "cutting a hole ... with circular interpolation"), at a
+    radius of 100: a half circle up to (0,100), then a full circle round (0,0), then a line.
+    Each axis turns round within an arc (X at 50, -100 and 100, Y at -100) or between two
+    (Y at 100). RP "returns the current position" (§6.13): the steps emitted, so the counter is
+    within a step of the carriage and, on the way back from a turn, moves only as the axis
+    passes a whole step. The counter took only the first turn of a motion, and only one it
+    knew the way before (Y's motion begins at rest while X ramps up to the contour): X at 99
+    on its way down after its third turn read 50 (the step of its first), Y after its turns
+    read a step ahead; a KL there kept it for good."""
+    h = Harness(model)
+    sep = ";" if model.startswith("PCIX") else " "
+    h.send(sep.join(CIRCLE))
+    axes = [h.axis("X"), h.axis("Y")]
+    for k in range(1, 2300):
+        h.until(k * 0.002)
+        counts = [int(v) for v in h.send(f"RP{sep}").strip(b"\n\r").split(b",")[:2]]
+        for axis, count in zip(axes, counts, strict=True):
+            x = axis.traj.position(h.t)
+            assert abs(count - x) < 1.0, (h.t, axis.letter, x, count)
+    if model != "PC48-4":
+        return  # (the instants below are the PC48's)
+    for when, letter, count in ON_THE_CIRCLE:
+        h = Harness(model)
+        h.send(sep.join(CIRCLE))
+        h.until(when)
+        assert number(h.send(f"A{letter} RP ")) == count, when
+        h.send("KL ")
+        h.run()
+        assert number(h.send(f"A{letter} RP ")) == count, when

@@ -314,3 +314,36 @@ def test_pc68_counter_after_a_turn_counts_the_steps_emitted(model: str) -> None:
     assert c.send(b"AX RP", 1.105) == b"\n\r-489\n\r"
     assert c.send(b"AX KL RP") == b"\n\r-489\n\r"
     assert pc68_poll(c, 1.5) == ("PNNN", -489)
+
+
+@pytest.mark.parametrize("model", PC48_FAMILY)
+def test_pc68_stop_just_after_a_turn_counts_no_step_ahead(model: str) -> None:
+    """A stop given just after a jog turned round, before the way back has emitted a step.
+    ``JG1000`` at AC2000, then ``JG-1000``: the axis turns at 700.195 at 1.2002 s and is at
+    700.099 at 1.21 s, the counter at 700 (RP "returns the current position", PC48 §6.13: the
+    steps emitted; 701 was never reached). The stop there began a new motion the negative way
+    from 700.099 and counted it as if the motion had come down from above: RP 701, and a KL in
+    the same write (as a limit would) kept 701 for good."""
+    c = Client(model)
+    c.send(b"AX AC2000 JG1000;")
+    c.send(b"AX JG-1000;", 0.70013)
+    assert c.send(b"AX RP", 1.21) == b"\n\r700\n\r"
+    assert c.send(b"AX ST KL RP") == b"\n\r700\n\r"
+    assert pc68_poll(c, 1.5) == ("MNNN", 700)
+
+
+@pytest.mark.parametrize("model", PC48_FAMILY)
+def test_pc68_move_begun_from_a_jog_the_other_way_counts_no_step_back(model: str) -> None:
+    """A move queued behind a jog starts from rest where the jog is once it is up to speed
+    (docs/decisions.md, a GO during a jog). ``JG-1000`` at AC3333 has emitted 150 steps when
+    it reaches its speed at -150.278 (RP -150), and ``MR100 GO`` sets off the positive way from
+    there. The move counted from -150.278 as if it had come up from below: RP -151 at once, a
+    step the negative way that was never emitted, while the axis moved the positive way. RP
+    "returns the current position" (PC48 §6.13); the counter counts the steps emitted, and moves
+    with the axis, never against it."""
+    c = Client(model)
+    c.send(b"AX AC3333 JG-1000 MR100 GO;")
+    assert c.send(b"AX RP", 0.2999) == b"\n\r-149\n\r"
+    reads = [int(c.send(b"AX RP", 0.3 + k * 0.0005).strip()) for k in range(1, 40)]
+    assert reads[0] == -150
+    assert reads == sorted(reads)
