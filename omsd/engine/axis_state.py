@@ -100,8 +100,8 @@ class AxisState:
         "outputs", "pa", "pending", "phys_offset", "queue", "quiet_known", "quiet_memo", "ramp",
         "ratio", "se_ms", "sensor_check", "servo", "servo_last", "servo_trip_reported",
         "setpoint_offset", "slip_detect", "slip_kill", "slipped", "soft_limit", "source",
-        "stall_phys", "track_counter", "track_enc", "tracking", "traj", "travel_limits", "uu",
-        "vb", "vl", "wait", "world",
+        "stall_phys", "stream_end", "track_counter", "track_enc", "tracking", "traj",
+        "travel_limits", "uu", "vb", "vl", "wait", "world",
     )
     # fmt: on
 
@@ -162,6 +162,7 @@ class AxisState:
         self.home: HomeSearch | None = None
         self.home_last_phys = phys
         self.wait: Wait | None = None
+        self.stream_end: float | None = None  # when the last VS entry's time is over, unrounded
         self.sensor_check: float | None = None
         self.limit_latched: int = 0  # direction of the limit last run into, for the status
         # ramping down from a limit in the soft-limit mode (SL): the switch it runs past is what

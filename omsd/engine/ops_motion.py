@@ -60,9 +60,15 @@ def _stream(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # PC48 §6.8: "generate a pulse train without acceleration or deceleration at the rates
     # specified. The parameters are time in 1/1024 second sample intervals, X velocity, and
     # Y velocity." If the stream runs dry the last rate continues ("slave mode").
+    # The unit is not the sample (the PC48 samples 2048 times a second, the PC46-21/-41 512): an
+    # entry that follows on from one whose time ended between two samples counts from that end,
+    # so a stream lasts the time its entries add up to; a rate changes on the sample at or after.
     machine = ex.machine
     samples, vx, vy = op.args
-    tick = machine.clock.at_or_after(t)
+    clock = machine.clock
+    tick = clock.at_or_after(t)
+    end = axis.stream_end
+    start = end if end is not None and clock.at_or_after(end) == tick else tick
     for a, v in ((axis, vx), (machine.axis_by_letter("Y"), vy)):
         if a is None:
             continue
@@ -71,8 +77,8 @@ def _stream(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
             a.begin(tick, [pf.cruise(a.to_motor(v))], Motion.STREAM)
         elif a.motion is Motion.STREAM or a is axis:
             a.halt(tick)
-    until = tick + samples / machine.model.velocity_stream_rate
-    return Wait("time", until=until)
+    axis.stream_end = start + samples / machine.model.velocity_stream_rate
+    return Wait("time", until=clock.at_or_after(axis.stream_end))
 
 
 def _one_step(ex: Executor, axis: Axis, op: Op, t: float) -> Result:

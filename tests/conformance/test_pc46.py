@@ -391,6 +391,36 @@ def test_sample_rate_512_or_1024(model: str) -> None:
     assert h.position("X") == 5000
 
 
+@pytest.mark.parametrize("model", ["PC46-21", "PC46-41", "PC46-22"])
+def test_velocity_stream_time_is_in_1024ths_also_at_512_samples(model: str) -> None:
+    """VS: "The VS command will generate a pulse train without acceleration or deceleration at
+    the rates specified for the time specified by the first parameter" (datasheet); the PC48
+    page gives the unit: "time in 1/1024 second sample intervals" (on a board that samples
+    2048 times a second: the unit is not the sample). The datasheet names no other unit for the
+    -21 and -41, which sample "512 times each second", so a stream takes the time it asks for
+    there too: twenty ``VS3,1024,0;`` are 60/1024 s at 1024 steps/s, 60 steps, not 80 (each
+    entry's three 1024ths rounded up to the next 512th sample, as before). A velocity changes
+    on the sample at or after the entry's time; the entries' times add up as given.
+    ``VS1024,1000,0;`` lasts one second on every model."""
+    h = quiet(model)
+    for _ in range(2):
+        h.send("AX " + "VS3,1024,0;" * 10)
+    h.send("VS1,0,0;")
+    x = h.axis("X")
+    h.until(59 / 1024)
+    assert x.velocity(h.t) == 1024
+    h.until(61 / 1024)
+    assert x.velocity(h.t) == 0
+    assert h.position("X") == 60
+    h.run()
+    assert h.position("X") == 60
+    h = quiet(model)
+    h.send("AX VS1024,1000,0; VS1,0,0;")
+    h.until(2.0)
+    assert h.position("X") == 1000
+    assert h.errors() == []
+
+
 @pytest.mark.parametrize("model", ["PC46-22", "PC46-21"])
 def test_velocity_at_most_522000(model: str) -> None:
     """ "Velocity 0 to 522,000 pulses per second simultaneous on each axis" (the features' "0 to
