@@ -225,6 +225,29 @@ def test_p3_cut_hole_on_z_and_t_with_x_aux_as_torch(model: str) -> None:
     assert h.errors() == []
 
 
+def test_p3_typed_at_power_up_is_refused_outside_aa_mode() -> None:
+    """P3 as printed begins ``CV1000`` / ``CD,,0,0;`` with no ``AA`` (the PC48's and VS4's hole
+    examples begin with one); CD "is executed in the AA mode" and CV "from the AA mode" (PC48
+    tables: "AX – AS Not valid"). Typed at power-up, in single-axis mode, the contour lines are
+    command errors, AN0/AF0 switch X's auxiliary output, and nothing moves (decisions.md, "PC46
+    readings")."""
+    h = quiet("PC46-42")
+    h.send(P3 + " ")
+    h.run()
+    assert errors(h) == [
+        (ErrorKind.NOT_VALID_IN_MODE, "CV1000"),
+        (ErrorKind.NOT_VALID_IN_MODE, "CD,,0,0"),
+        (ErrorKind.NOT_VALID_IN_MODE, "CR0,5000,3.1415926"),
+        (ErrorKind.NOT_VALID_IN_MODE, "CR0,0,6.2831853"),
+        (ErrorKind.NOT_VALID_IN_MODE, "MT-10,10000"),
+        (ErrorKind.NOT_VALID_IN_MODE, "CE"),
+        (ErrorKind.NOT_VALID_IN_MODE, "MT,,-1000,0"),
+        (ErrorKind.NOT_VALID_IN_MODE, "CX"),
+    ]
+    assert h.axis("X").aux is False
+    assert h.query("AA RP") == frame("0,0,0,0")
+
+
 @pytest.mark.parametrize("model", NO_CONTOUR)
 def test_p3_needs_contouring_not_on_21_41(model: str) -> None:
     """ "*These commands are not available on the PC46-21 and PC46-41 models." Sent to a -41 (or
