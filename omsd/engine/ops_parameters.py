@@ -166,11 +166,13 @@ def _hn(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
         # "HN ... will close the loop and enable the PID". Closing is bumpless: an axis at
         # rest is commanded to hold where its motor is (an open loop may have drifted, or run
         # its commanded position on without the motor), and the stage, switches and all, is
-        # where the motor is
+        # where the motor is. The set point is the commanded position plus the backlash offset
+        # ("offsetting the motor's position "set point" from the commanded position", §5.12.4),
+        # so the commanded position is the encoder less that offset
         loop = axis.servo
         axis.servo_sync(t)
         if not loop.closed and axis.motion is Motion.IDLE:
-            axis.command_at(t, float(loop.encoder_counts))
+            axis.command_at(t, float(loop.encoder_counts) - axis.setpoint_offset)
             loop.set_position(loop.position)
         loop.closed = True
         axis.servo_trip_reported = False

@@ -4,6 +4,9 @@
 * Ending position hold ends its correction: HF (every board) and the PC48's LP, entered while the
   hold is moving the axis back toward the held position, left the correction running to its end
   (EA already said "Position maintenance disabled").
+* Closing a servo's loop does not move its motor when backlash compensation holds the set point
+  off the commanded position: HN took RP to RE and then added the offset again, so each
+  ``HF;HN;`` walked the motor one backlash further (second review of the servo axes).
 """
 
 from __future__ import annotations
@@ -52,4 +55,41 @@ def test_ending_the_hold_ends_its_correction(model: str, hold: str, command: str
     x = h.position("X")
     h.advance(1.0)
     assert h.position("X") == x
+    assert h.errors() == []
+
+
+def _rp_re(h: Harness) -> tuple[int, int]:
+    rp, re = (int(x) for x in h.send("AX;RP;RE;\n").split(b"\n\r") if x)
+    return rp, re
+
+
+def test_closing_the_loop_under_backlash_leaves_the_motor_where_it_is() -> None:
+    """PCIx §5.12.4, its example: "AX; BC-10; MA1000; GO; ... MA-1000; GO;" ... "the motor will
+    go 2010 steps, ending at -1000, and the encoder will read -1010": "offsetting the motor's
+    position "set point" from the commanded position will compensate for backlash". HN "closes
+    the loop, enabling the PID" (§2.7.2: "Send LP0;HN; commands and check the shaft of the motor
+    to make sure it is stiff"), and RP is "the motor's commanded position", RE "the motor's
+    actual position". Closing the loop at rest commands the motor where it is, so the set point
+    (commanded position plus the offset) is the encoder: RP -1000 and RE -1010 stay as they are.
+    Before, HN made RP the encoder count and the offset was added on top: the motor moved 10
+    counts (RP -1010, RE -1020), and each HF;HN moved it 10 more."""
+    h = Harness("PCIX-400")
+    h.send("AX;HN;BC-10;MA1000;GO;\n")
+    h.advance(1.0)
+    assert _rp_re(h) == (1000, 1000)
+    h.send("AX;MA-1000;GO;\n")
+    h.advance(1.0)
+    assert _rp_re(h) == (-1000, -1010)
+    for _ in range(3):
+        h.send("AX;HF;\n")
+        h.advance(0.2)
+        assert _rp_re(h) == (-1000, -1010)
+        h.send("AX;HN;\n")
+        h.advance(0.5)
+        assert _rp_re(h) == (-1000, -1010)
+    assert h.send("AX;?PM;\n") == b"hn\n\r"
+    # and the next move still goes where it is told, with the set point offset kept
+    h.send("AX;MR-500;GO;\n")
+    h.advance(1.0)
+    assert _rp_re(h) == (-1500, -1510)
     assert h.errors() == []
