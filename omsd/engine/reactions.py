@@ -24,9 +24,11 @@ def on_end(ex: Executor, axis: Axis, t: float) -> None:
     motion = axis.motion
     axis.settle(t)
     if motion is Motion.HOLD:
+        # the correction's steps were sent to put the encoder back: from here the counter and
+        # the encoder go on together, and the next move's goal counts from the held position
+        # (HN: "that position is maintained ... until commanded to a new position")
         axis.in_position = True
-        if axis.slip_detect:
-            axis.anchor_tracking(t)
+        axis.anchor_tracking(t)
     else:
         axis.power_down(t)
         axis.hold_goal = axis.tracked_encoder(axis.position(t))

@@ -7,6 +7,10 @@
 * Closing a servo's loop does not move its motor when backlash compensation holds the set point
   off the commanded position: HN took RP to RE and then added the offset again, so each
   ``HF;HN;`` walked the motor one backlash further (second review of the servo axes).
+* Position hold goes on from where its correction left the encoder: after the hold had put a
+  slipped stage back, the next move's goal was taken from the counter/encoder relation of before
+  the slip, so ``MR100`` was undone by the hold, and an ``HF;HN;`` drove the stage to a place
+  never commanded (same review).
 """
 
 from __future__ import annotations
@@ -92,4 +96,58 @@ def test_closing_the_loop_under_backlash_leaves_the_motor_where_it_is() -> None:
     h.send("AX;MR-500;GO;\n")
     h.advance(1.0)
     assert _rp_re(h) == (-1500, -1510)
+    assert h.errors() == []
+
+
+@pytest.mark.parametrize(
+    ("model", "sep", "ratio"),
+    [("PCIX-040", ";", "ER1,1;"), ("PCIX-020", ";", "ER2,1;"), ("PC48-4E", " ", "")],
+)
+def test_after_a_hold_correction_the_next_move_counts_from_the_held_position(
+    model: str, sep: str, ratio: str
+) -> None:
+    """PCIx HN: "A 200,000 step move is performed, then that position is maintained within the
+    10 step dead band until commanded to a new position"; §5.7.1: "the axis will begin moving
+    again to correct for any error encountered during the course of the full move. This process
+    will continue until the encoder position is within the dead band of the motor's target
+    position". A slip of the carriage is corrected back to the encoder's 1000 (the counter,
+    "the motor's commanded position", steps back to make up for it); MR100 is then "a new
+    position" 100 encoder counts on, 1100, and the hold keeps it there. Before, the goal of
+    the next move came from the counter/encoder relation of before the slip: MR100 ran to the
+    counter's 1000 and the hold drove it back to encoder 1000 (MR100 undone)."""
+    h = quiet(model)
+    h.send(f"AX;{ratio}HV1000;HG10;HD0;HN;MR1000;GO;".replace(";", sep))
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1000
+    h.board.inject_slip("X", 50, h.t)  # 50 steps: 50 x the ratio in encoder counts
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1000 and not moving(h, "X")
+    h.send("AX;MR100;GO;".replace(";", sep))
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1100 and not moving(h, "X")
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1100
+    assert h.errors() == []
+
+
+def test_hn_again_after_hf_holds_the_last_commanded_position() -> None:
+    """HF "disables position hold"; HN again "enables position correction after a move": the
+    position held is the one last commanded (the move's, as at power-up, where HN puts back a
+    slip made with the hold off). With a slip corrected earlier by the hold, HF, another slip of
+    100 and HN, the encoder goes back to the commanded 1000; before, the old relation sent it to
+    900, a place never commanded."""
+    h = quiet("PCIX-040")
+    h.send("AX;HV1000;HG10;HD0;HN;MR1000;GO;")
+    h.advance(2.0)
+    h.board.inject_slip("X", 100, h.t)
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1000
+    h.send("AX;HF;")
+    h.advance(0.1)
+    h.board.inject_slip("X", 100, h.t)
+    h.advance(0.1)
+    assert h.board.axes[0].encoder(h.t) == 1100
+    h.send("AX;HN;")
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1000 and not moving(h, "X")
     assert h.errors() == []
