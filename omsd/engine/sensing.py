@@ -47,10 +47,6 @@ def next_event(axis: AxisState) -> tuple[float, str]:
         when = axis.outputs[0][0]
         if when < best:
             best, what = when, "output"
-    if axis.servo is not None:
-        when = axis.servo_check_time()
-        if when is not None and when < best:
-            best, what = when, "servo"
     wait = axis.wait
     if wait is not None and wait.until is not None and wait.until < best:
         best, what = wait.until, "wait"
@@ -66,6 +62,12 @@ def next_event(axis: AxisState) -> tuple[float, str]:
             later = backlash_tick(axis)
             if later is not None and later < best:
                 best, what = later, "sensor"
+    if axis.servo is not None:
+        # after the look at the sensors: a look at the loop on the sample a switch is reached
+        # would take the sample, and the crossing, searched for after it, is never looked at
+        when = axis.servo_check_time()
+        if when is not None and when < best:
+            best, what = when, "servo"
     return best, what
 
 

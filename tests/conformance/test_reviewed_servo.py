@@ -11,6 +11,8 @@
   slipped stage back, the next move's goal was taken from the counter/encoder relation of before
   the slip, so ``MR100`` was undone by the hold, and an ``HF;HN;`` drove the stage to a place
   never commanded (same review).
+* A switch reached on the very sample the servo loop was looked at (every 32nd sample) went
+  unseen: a closed-loop servo ran through its limit switch or past home (same review).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from __future__ import annotations
 import pytest
 
 from omsd.board.harness import Harness
+from omsd.board.world import AxisWorld
 
 from .support import moving, quiet
 
@@ -151,3 +154,36 @@ def test_hn_again_after_hf_holds_the_last_commanded_position() -> None:
     h.advance(2.0)
     assert h.board.axes[0].encoder(h.t) == 1000 and not moving(h, "X")
     assert h.errors() == []
+
+
+@pytest.mark.parametrize("limit", [1000.0, 1001.0, 1016.0])
+def test_a_closed_loop_servo_stops_at_its_limit_whatever_the_sample(limit: float) -> None:
+    """HN: "For servo axes, this mode is disabled when ... a limit is encountered"; LN: the
+    limit switch closure "will stop the associated pulse stream" (and §5.5: a limit flushes the
+    queue). `AX;HN;AC2000;JG1000;` reaches the switch at 1000 on sample 2560 (1.25 s), one of
+    the samples at which the board also looks at the servo loop (1/64 s apart): the jog stops
+    there, QA shows the limit and the loop is open. Before, the look at the loop took that
+    sample and the switch's edge was never looked for again: the jog ran on through the switch
+    (RP 2750 at 3 s, QA ``PNLN`` while moving, ``?PM`` ``hn``); at 1001 or 1016 it stopped."""
+    h = Harness(
+        "PCIX-400", world={"X": AxisWorld(positive_limit=limit, home_low=5e6, home_high=5e6 + 100)}
+    )
+    h.send("AX;HN;AC2000;JG1000;\n")
+    h.advance(3.0)
+    rp, _ = _rp_re(h)
+    assert limit <= rp <= limit + 1
+    assert h.send("AX;QA;?PM;\n") == b"PNLN\n\rhf\n\r"
+    assert h.send("AX;RV;\n") == b"0\n\r"
+
+
+def test_a_closed_loop_servo_finds_home_whatever_the_sample() -> None:
+    """HM "will cause the current axis or specified axes to move in the positive direction at
+    the predefined velocity until the home is detected": with AC2000 the home switch (1000) is
+    reached on a sample at which the servo loop is also looked at. Before, the search ran past
+    it and on (RP 2750 at 3 s and still going)."""
+    h = Harness("PCIX-400")
+    h.send("AX;HN;AC2000;VL1000;HM500;\n")
+    h.advance(3.0)
+    rp, _ = _rp_re(h)
+    assert rp == 750  # loaded 500 at the switch's edge, then 1000**2 / (2 * 2000) to stop
+    assert h.send("AX;RV;\n") == b"0\n\r"
