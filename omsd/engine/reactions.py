@@ -115,11 +115,12 @@ def _look_for_home(axis: Axis, t: float) -> None:
     # loads it: HM's "move absolute to the same position as specified in the HM command" then
     # returns home
     axis.load_counter(t, float(math.trunc(axis.to_motor(home.position))))
-    if axis.has_encoder and axis.servo is None and axis.host.options.home_loads_encoder:
+    if axis.has_encoder and axis.host.options.home_loads_encoder:
         # PCIx HM: "position counters will be initialized"; HR, which "behaves exactly like the
-        # HM command": "the position and encoder counters are loaded with the parameter(s)" (a
-        # servo axis's encoder is its loop's, which follows the counter); the encoder the
-        # parameter itself, as LP's
+        # HM command": "the position and encoder counters are loaded with the parameter(s)";
+        # the encoder the parameter itself, as LP's. A servo's too: loading is not moving, and
+        # a closed loop whose commanded position alone were loaded would drive the motor back
+        # by the difference
         axis.anchor_encoder(t, float(home.position))
     axis.anchor_tracking(t)
     axis.decelerate(t)

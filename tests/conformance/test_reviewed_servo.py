@@ -13,6 +13,8 @@
   never commanded (same review).
 * A switch reached on the very sample the servo loop was looked at (every 32nd sample) went
   unseen: a closed-loop servo ran through its limit switch or past home (same review).
+* A servo's home loads its encoder with its position counter: with the commanded position alone
+  loaded, the closed loop drove the motor back by the difference (same review).
 """
 
 from __future__ import annotations
@@ -187,3 +189,37 @@ def test_a_closed_loop_servo_finds_home_whatever_the_sample() -> None:
     rp, _ = _rp_re(h)
     assert rp == 750  # loaded 500 at the switch's edge, then 1000**2 / (2 * 2000) to stop
     assert h.send("AX;RV;\n") == b"0\n\r"
+
+
+@pytest.mark.parametrize("loop", ["HN;", "HF;"])
+def test_a_servo_home_loads_the_encoder_and_ramps_to_a_stop(loop: str) -> None:
+    """HR: "When the home input is detected, the position and encoder counters are loaded with
+    the parameter(s) supplied in the HR command. Then the axis is ramped to a stop. It behaves
+    exactly like the HM command"; HM: "This will result in the axis stopping beyond the home
+    switch ... The axis can be easily returned to the precise home position by using an MA
+    command after the HM command". Loading is not moving: the servo's encoder takes the
+    parameter with its commanded position, so the closed loop goes on ramping forwards, the
+    motor never turns back, RE reads RP, and MA500 returns to the switch. Before, only the
+    commanded position was loaded on a servo: the closed loop drove the motor straight back by
+    the difference (RE 1001, then 807, 629 ... 500 within 5 ms) while the switches stayed where
+    the counter said; with the loop open RE stayed 0."""
+    h = Harness("PCIX-400")
+    h.send(f"AX;{loop}AC2000;VL1000;HM500;\n")
+    res = []
+    for k in range(1, 3000):
+        h.until(k * 0.001)
+        res.append(_rp_re(h))
+    rp, re = res[-1]
+    assert rp == 500 + 250  # found at the switch's edge, 1000**2 / (2 * 2000) counts to stop
+    if loop == "HN;":
+        assert re == rp
+        # the motor follows its commanded position throughout: it never turns back
+        assert max(abs(rp - re) for rp, re in res) <= 2
+    else:
+        assert re == 500  # loaded at home; the undriven motor stayed there
+    assert h.send("AX;QA;\n") == b"PNNN\n\r"  # beyond the home switch
+    h.send("AX;HN;MA500;GO;\n")
+    h.advance(2.0)
+    assert _rp_re(h) == (500, 500)
+    assert h.send("AX;QA;\n")[3:4] == b"H"
+    assert h.errors() == []
