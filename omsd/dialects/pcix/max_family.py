@@ -75,7 +75,9 @@ Every answer is read from the board's state at the moment of the query; only ``#
     an encoder, where it sends ``LP`` for the motor position; devOmsCom.cc loads the two apart,
     ``"LO%ld LPE%ld;"``. So on a stepper with an encoder LPE loads the encoder alone (the
     mirror of the PCIx's LO, "sets the motor position independently of the encoder
-    position"); on a servo, whose position is its encoder, it is LP, as LO there loads both.
+    position"); on a servo, whose position is its encoder, it is LP (the encoder alone loaded
+    under a closed loop would move the motor by the difference, as LO, which loads the
+    commanded position alone, does there).
     Without this row the PCIx would read ``LP`` (loading 0!) and an unknown ``E``.
 
 ``PSO`` / ``PSE`` / ``PSM`` — select the motor type of the current axis
