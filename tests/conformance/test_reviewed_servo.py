@@ -9,8 +9,8 @@
   ``HF;HN;`` walked the motor one backlash further (second review of the servo axes).
 * Position hold goes on from where its correction left the encoder: after the hold had put a
   slipped stage back, the next move's goal was taken from the counter/encoder relation of before
-  the slip, so ``MR100`` was undone by the hold, and an ``HF;HN;`` drove the stage to a place
-  never commanded (same review).
+  the slip, so the hold undid ``MR100`` (in part or whole), and an ``HF;HN;`` drove the stage
+  to a place never commanded (same review).
 * A switch reached on the very sample the servo loop was looked at (every 32nd sample) went
   unseen: a closed-loop servo ran through its limit switch or past home (same review).
 * A servo's home loads its encoder with its position counter: with the commanded position alone
