@@ -265,9 +265,15 @@ class Executor:
             if p is None:
                 continue
             axis.pending = None
-            here = axis.position(tick)
             value = axis.to_motor(p.value)
-            target = float(math.trunc(value)) if p.kind == "abs" else here + math.trunc(value)
+            if p.kind == "abs":
+                target = float(math.trunc(value))
+            else:
+                # MR: "relative from the current position at the time the move is executed"
+                # (PC48 §6.7), the position RP returns: the steps emitted, not the carriage,
+                # which a move reached while a jog runs finds between two steps (-150.278,
+                # counted -150: MR100 goes to -50, not -50.278 and to rest on -51)
+                target = float(axis.counter(tick) + math.trunc(value))
             targets[axis.index] = target
             if p.linear is not None:
                 linear.append(axis)

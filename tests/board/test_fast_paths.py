@@ -1075,13 +1075,15 @@ def test_moves_that_follow_on_from_between_two_steps_say_the_same(
     """Found by review (a mutation of ``follow_on_until`` no test saw): a move begun while the
     axis jogs starts between two steps; the moves after it start each where the last came to
     rest, on a whole step (``Axis.settle``), also when a board run only every 3 s takes their
-    instants together."""
+    instants together. The move is MO's one pulse (an MR's target is the count's, a whole
+    step: ``Executor.start_pending``), which ends between two steps as it began."""
     taken = started(monkeypatch)
     twin = Twin(get_model("PC48-4"))
     twin.receive(b"AY;VL5000;AC50000;JG-363;", 0.0, 1)
-    twin.receive(b"AY;MR67;GO;MR-618;GO;MR737;GO;MR-5;GO;", 0.3, 1)
-    twin.advance(0.31)  # (the move's first look: it ends at -40.69, a step short of -41)
+    twin.receive(b"AY;MO;MR-618;GO;MR737;GO;MR-5;GO;", 0.3, 1)
+    twin.advance(0.3)  # (MO ends at -108.69, between two steps)
     assert twin.fast.axes[1].traj.final % 1.0
+    twin.advance(0.3005)  # (MO's first look: its end is the next instant, and a follow-on's)
     for now in (3.0, 6.0):
         twin.receive(b"AY QA RP;", now, 1)
     assert taken["ends"] == 2  # (one axis, in each of the two advances)
