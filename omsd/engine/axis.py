@@ -130,17 +130,30 @@ class Axis(AxisState):
         with the JG command"), not the registers', which may have changed since it began."""
         v = self.traj.velocity(t)
         if v == 0.0:
-            self.halt(t)
+            self.stop_on(t)
             return
         self.outputs.clear()  # (a contour's I/O actions further on its path: never reached)
         base = self.stop_base()
         if base and abs(v) <= base:
-            self.halt(t)  # (at or below the base velocity: it drops to rest at once)
+            self.stop_on(t)  # (at or below the base velocity: it drops to rest at once)
             return
         # a stop of the soft-limit mode's own ramp down (ST typed while it runs) is that same
         # ramp at AC: it runs on past the switch it reacts to (limit_ramp), heard once
         ramp = pf.velocity_change(v, math.copysign(base, v), self.ac)
         self.begin(t, ramp, motion, limit_ramp=True)
+
+    def stop_on(self, t: float) -> None:
+        """Stop pulses at once on tick ``t`` (:meth:`decelerate` with no speed to ramp down
+        from there). Until the tick the axis goes on as it was, as :meth:`begin` has it, and
+        the counter with it: a jog at -2500 at -109.375 (RP -109) given ``MR50 GO ST`` between
+        two ticks (its move would start from rest on the next) read -110 at once, the step the
+        pulses reach a quarter of a millisecond later. A stop of no length then ends there."""
+        now = self.host.now
+        if t > now and self.traj.moving_at(now):
+            x = self.traj.position(t)
+            self.begin(t, [], Motion.STOP, final=float(counted(self.traj, x, t)))
+        else:
+            self.halt(t)
 
     def stop_base(self) -> float:
         """The base velocity a stop of the current motion ramps down to and stops from (ST, SA,

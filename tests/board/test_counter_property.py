@@ -6,11 +6,14 @@ travels"; PC48 §6.13 RP: "returns the current position").
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from omsd.board.harness import Harness
 
 MODELS = ["PC48-4", "PC48-4E", "VS4-040", "PCIX-040"]
+EPS = 1e-6
 
 
 # -- what the property found -------------------------------------------------------------------
@@ -50,3 +53,27 @@ def test_a_move_reached_while_a_jog_runs_goes_its_steps_from_the_count(model: st
     assert rp(h) == -150
     h.run()
     assert rp(h) == -50
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_stop_between_two_ticks_counts_no_step_before_its_tick(model: str) -> None:
+    """The property's second find, minimised. A jog at -2500 (AC200000) is at -109.375 at
+    0.05 s, between two ticks: 109 steps emitted, RP -109. ``MR50 GO ST`` there: the move
+    would start from rest on the next tick (0.05029), so the ST found no speed to ramp down
+    from on that tick and stopped the pulses "at once" as of the tick, where the carriage is
+    at -110.107 (on the PC48), and RP read -110 at 0.05: a step the pulses reach only at
+    0.05025. RP "returns the current position" (PC48 §6.13), and this command "is not queued,
+    i.e. the current position will be returned immediately even if the axis is in motion":
+    until the tick the jog goes on, and RP counts -110 once the carriage gets there."""
+    h = Harness(model)
+    h.send("AX AC200000 JG-2500 ")
+    h.until(0.05)
+    assert rp(h) == -109
+    assert int(h.send("AX MR50 GO ST RP ").strip()) == -109
+    h.until(0.05026)
+    assert rp(h) == -110
+    tick = h.board.clock.at_or_after(0.05)
+    at_tick = math.ceil(-109.375 - 2500 * (tick - 0.05) - EPS)  # (where the jog stops)
+    h.run()
+    assert rp(h) == at_tick
+    assert h.axis().position(h.t) == at_tick
