@@ -183,6 +183,7 @@ class Executor:
     def flush(self, axis: Axis, t: float) -> None:
         dropped = axis.queue.flush()
         axis.wait = None
+        axis.stream_end = None  # a VS after it begins a stream anew (ops_motion._stream)
         axis.pending = None
         axis.in_arm = None
         axis.in_fire = None

@@ -63,6 +63,7 @@ def _stream(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # The unit is not the sample (the PC48 samples 2048 times a second, the PC46-21/-41 512): an
     # entry that follows on from one whose time ended between two samples counts from that end,
     # so a stream lasts the time its entries add up to; a rate changes on the sample at or after.
+    # A stream stopped (ST, KL: _stop; a flush: a limit, SA) has nothing to follow on from.
     machine = ex.machine
     samples, vx, vy = op.args
     clock = machine.clock
@@ -195,6 +196,7 @@ def _stop(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     stopped = was if was is not None else axis.motion
     ex.cancel(axis, "KL" if kill else "ST")
     axis.home = None
+    axis.stream_end = None  # a VS after the stop begins a stream anew (_stream)
     if stopped is Motion.HOLD and axis.hold:
         # the hold's own correction, of a hold the stop leaves on (the PCIx's lists name no
         # stop): it goes on toward the same goal; a kill stops the pulses and the hold, still

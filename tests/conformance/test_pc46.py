@@ -444,6 +444,39 @@ def test_velocity_stream_time_is_in_1024ths_also_at_512_samples(model: str) -> N
     assert h.errors() == []
 
 
+@pytest.mark.parametrize("model", ["PC46-21", "PC46-41", "PC46-22"])
+@pytest.mark.parametrize("arrives", [3.4, 4.0])
+@pytest.mark.parametrize("interrupt", ["KL;", "ST;"])
+def test_a_stream_begun_after_an_interruption_takes_its_whole_time(
+    model: str, arrives: float, interrupt: str
+) -> None:
+    """VS: "generate a pulse train ... at the rates specified for the time specified by the
+    first parameter" (datasheet), the time "in 1/1024 second sample intervals" (PC48 §6.8). A
+    stream stopped (KL, ST) while its entry's time still ran, and begun again by a new VS, has
+    nothing to follow on from: the new entry counts its time from the sample it begins on, on
+    every PC46 (a 512-sample board rounds it up to the next sample). ``VS3,1024,0;`` killed at
+    1.5/1024 s, ``VS3,1024,0;VS1,0,0;`` sent at 3.4/1024 s (or 4/1024 s, on a sample): X runs at
+    1024 steps a second from 4/1024 s for 3/1024 s (4/1024 s on the -21 and -41), and did not
+    count from the end of the killed entry's time (3/1024 s), which left the new one 2/1024 s."""
+    rate = MODELS[model].sample_rate
+    h = quiet(model)
+    h.send("AX VS3,1024,0;")
+    h.until(1.5 / 1024)
+    h.send(interrupt)
+    h.until(arrives / 1024)
+    h.send("VS3,1024,0;VS1,0,0;")
+    x = h.axis("X")
+    start = h.position("X")
+    end = tick_at_or_after(Fraction(4 + 3, 1024), rate)
+    h.until(float(end) - 0.5 / 1024)
+    assert x.velocity(h.t) == 1024
+    h.until(float(end) + 0.5 / 1024)
+    assert x.velocity(h.t) == 0
+    h.run()
+    assert h.position("X") - start == (end - Fraction(4, 1024)) * 1024
+    assert h.errors() == []
+
+
 @pytest.mark.parametrize("model", ["PC46-22", "PC46-21"])
 def test_velocity_at_most_522000(model: str) -> None:
     """ "Velocity 0 to 522,000 pulses per second simultaneous on each axis" (the features' "0 to
