@@ -26,9 +26,14 @@ def on_end(ex: Executor, axis: Axis, t: float) -> None:
     if motion is Motion.HOLD:
         # the correction's steps were sent to put the encoder back: from here the counter and
         # the encoder go on together, and the next move's goal counts from the held position
-        # (HN: "that position is maintained ... until commanded to a new position")
+        # (HN: "that position is maintained ... until commanded to a new position"), not from
+        # where in the dead band the correction stopped (§5.7.1: "within the dead band of the
+        # motor's target position"), which would carry up to HD into every later target. Slip
+        # detection's relation is the encoder's own (its tolerance may be below HD)
         axis.in_position = True
         axis.anchor_tracking(t)
+        if not axis.slip_detect:
+            axis.track_enc = axis.hold_goal
     else:
         axis.power_down(t)
         axis.hold_goal = axis.tracked_encoder(axis.position(t))

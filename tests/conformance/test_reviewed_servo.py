@@ -135,6 +135,42 @@ def test_after_a_hold_correction_the_next_move_counts_from_the_held_position(
     assert h.errors() == []
 
 
+@pytest.mark.parametrize(
+    ("model", "sep", "ratio"),
+    [
+        ("PCIX-040", ";", "ER1,1;"),
+        ("PCIX-020", ";", "ER2,1;"),
+        ("PC48-4E", " ", ""),
+        ("VS4-040", " ", ""),
+    ],
+)
+@pytest.mark.parametrize("slip", [50, -50])
+def test_what_the_dead_band_leaves_is_not_carried_into_the_next_goal(
+    model: str, sep: str, ratio: str, slip: int
+) -> None:
+    """§5.7.1: the correction goes on "until the encoder position is within the dead band of
+    the motor's target position"; HN: "that position is maintained within the 10 step dead band
+    until commanded to a new position". With HD10 a correction stops up to 10 counts short of
+    the held 1000 (at 1010 after a slip of +50); MR100 is then "a new position", 1100, and the
+    hold keeps it within 10 of 1100. Before, the end of each correction took the encoder where
+    the correction stopped as the held position, so every slip, correction and MR100 carried
+    the dead band's remainder into the next target: four of them held 1440, not 1400 (40
+    outside the dead band of the position commanded)."""
+    h = quiet(model)
+    h.send(f"AX;{ratio}HV1000;HG10;HD10;HN;MR1000;GO;".replace(";", sep))
+    h.advance(2.0)
+    assert h.board.axes[0].encoder(h.t) == 1000
+    for k in range(1, 5):
+        h.board.inject_slip("X", slip, h.t)
+        h.advance(2.0)
+        assert abs(h.board.axes[0].encoder(h.t) - (900 + 100 * k)) <= 10
+        h.send("AX;MR100;GO;".replace(";", sep))
+        h.advance(2.0)
+        assert abs(h.board.axes[0].encoder(h.t) - (1000 + 100 * k)) <= 10
+        assert not moving(h, "X")
+    assert h.errors() == []
+
+
 def test_hn_again_after_hf_holds_the_last_commanded_position() -> None:
     """HF "disables position hold"; HN again "enables position correction after a move": the
     position held is the one last commanded (the move's, as at power-up, where HN puts back a
