@@ -127,8 +127,11 @@ def _stop_at(ex: Executor, axis: Axis, op: Op, t: float) -> Result:
     # a move with a base velocity ramps down to it and stops from there, as ST does
     pieces = pf.stop_at(dest - x, v0, axis.ac, axis.stop_base())
     if not pieces:  # (at or below the base velocity, the position passed: rest at once)
+        # on the tick, as ST's (Axis.stop_on): until then the pulses go on and RP counts them
         stopped = axis.motion
-        axis.halt(tick)
+        axis.stop_on(tick)
+        if axis.moving:
+            return motion_wait(axis)
         ex.stopped_at_once(axis, tick, stopped)
         return None
     reach = sum(p.x(p.duration) for p in pieces)

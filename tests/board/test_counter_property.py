@@ -419,3 +419,21 @@ def test_a_stop_between_two_ticks_counts_no_step_before_its_tick(model: str) -> 
     h.run()
     assert rp(h) == at_tick
     assert h.axis().position(h.t) == at_tick
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_stop_at_a_passed_position_between_two_ticks_counts_no_step_before_its_tick(
+    model: str,
+) -> None:
+    """Found by review of the stop above: FP at or below a move's base velocity, its position
+    passed ("The axis will overshoot if there is insufficient distance left to stop", PC48
+    FP), stops at once on the next tick, as ST does there; it read the tick's count at once. At 1000
+    steps/s (VB1000 VL1000) the move is at 50.9 at 0.0509: 50 steps emitted, and RP "returns
+    the current position" (PC48 §6.13): 50, not the step the pulses reach at 0.051."""
+    h = Harness(model)
+    h.send("AX VB1000 VL1000 AC100000 MR100000 GO ")
+    h.until(0.0509)
+    assert int(h.send("AX FP40 RP ").strip()) == 50
+    tick = h.board.clock.at_or_after(0.0509)
+    h.run()
+    assert rp(h) == math.floor(1000 * tick + EPS)  # (where the pulses stop, on the tick)
