@@ -102,21 +102,13 @@ def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
             elif ex.satisfied(axis, wait, t):
                 return False
             continue
-        if not _ends_plainly(axis, t):
+        ending = _ending(machine, axis, codes, t, tick)
+        if ending is None:
             return False
-        traj = axis.traj
-        x = float(counted(traj, traj.position(t), t))  # (Axis.settle: on a whole step)
-        start = _next_move(machine, axis, codes, tick, x)
-        if start is None:
-            return False
-        starts.append((axis, x, start))
+        starts.append(ending)
     if not starts:
         return False
-    for axis, x, start in starts:
-        axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
-        # (after_events: the straightforward way starts the move in the settle that follows
-        # the instant's reactions, which Machine.advance runs with after_events set)
-        _start(machine, axis, tick, start, True)
+    _start_all(machine, starts, tick)
     return True
 
 
@@ -161,24 +153,19 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         tick = machine.clock.at_or_after(t)
         if tick > max(machine.now, t):
             break  # (_next_move's own condition: a start after now)
+        machine.now = max(machine.now, t)  # (as Machine.advance, before the instant's events)
         starts: list[tuple[Axis, float, _Start]] = []
         for axis in due:
             event = axis.event
             if event is None or event[0] != t:
                 continue  # due later
-            if not _ends_plainly(axis, t):
+            ending = _ending(machine, axis, codes, t, tick, gears=False)
+            if ending is None:
                 break
-            traj = axis.traj
-            x = float(counted(traj, traj.position(t), t))  # (Axis.settle: on a whole step)
-            machine.now = max(machine.now, t)  # (as Machine.advance, before the instant's events)
-            start = _next_move(machine, axis, codes, tick, x, gears=False)
-            if start is None:
-                break
-            starts.append((axis, x, start))
+            starts.append(ending)
         else:
-            for axis, x, start in starts:
-                axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
-                _start(machine, axis, tick, start, True)
+            _start_all(machine, starts, tick)
+            for axis, _, _ in starts:
                 when = axis.next_event_time()
                 if when is None or when > now:
                     due.remove(axis)
@@ -190,6 +177,31 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         machine.unsettle(outside=False)  # (the settle after an instant's events)
         machine.front.pump(last)
         machine.settled = True
+
+
+def _ending(
+    machine: Core, axis: Axis, codes: Collection[str], t: float, tick: float, gears: bool = True
+) -> tuple[Axis, float, _Start] | None:
+    """What is due for ``axis`` at ``t`` is the plain end of a move (:func:`_ends_plainly`)
+    and its queue follows on with the next (:func:`_next_move`, from where the end leaves it,
+    on a whole step as ``Axis.settle`` counts it): the axis, that place and the move; None if
+    not. Changes nothing."""
+    if not _ends_plainly(axis, t):
+        return None
+    traj = axis.traj
+    x = float(counted(traj, traj.position(t), t))
+    start = _next_move(machine, axis, codes, tick, x, gears)
+    return None if start is None else (axis, x, start)
+
+
+def _start_all(machine: Core, starts: list[tuple[Axis, float, _Start]], tick: float) -> None:
+    """End each move of ``starts`` (:func:`_ending`) as ``reactions.on_end`` would, noting the
+    position it holds, and start its next on ``tick`` (after_events: the straightforward way
+    starts it in the settle that follows the instant's reactions, which ``Machine.advance``
+    runs with after_events set)."""
+    for axis, x, start in starts:
+        axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
+        _start(machine, axis, tick, start, True)
 
 
 def _moves_for_sender(axis: Axis) -> bool:
