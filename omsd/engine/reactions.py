@@ -126,7 +126,7 @@ def _look_for_home(axis: Axis, t: float) -> None:
         # the encoder the parameter itself, as LP's. A servo's too: loading is not moving, and
         # a closed loop whose commanded position alone were loaded would drive the motor back
         # by the difference
-        axis.anchor_encoder(t, float(home.position))
+        axis.anchor_encoder(t, float(math.trunc(home.position)))  # whole counts, as LP's
     axis.anchor_tracking(t)
     axis.decelerate(t)
 

@@ -142,3 +142,35 @@ def test_a_contour_runs_in_motor_steps_under_a_ratio() -> None:
     h.run()
     assert h.position("X") == 1000
     assert h.errors() == []
+
+
+@pytest.mark.parametrize("model", ["PC48-4E", "VS4-040", "PCIX-040"])
+@pytest.mark.parametrize(("search", "start"), [("HM", 0.0), ("HR", 2000.0)])
+def test_home_under_user_units_and_a_ratio_loads_the_steps_lp_loads(
+    model: str, search: str, start: float
+) -> None:
+    """HM: "The position counter will be initialized to the position supplied as a parameter
+    ... The axis may be commanded to go home by following this command with a move absolute to
+    the same position as specified in the HM command" (PC48 §6.11; HR "behaves exactly like the
+    HM command"), and ER: "This mode can be combined with user units ... All parameters are then
+    input in the user units which have been defined. The correct number of motor counts are
+    generated" (§6.15), the ratio "handled internally in floating point format" (§5.3). Under
+    ``ER1000,2000 UU0.5`` the parameter 601 is 300.5 counts, 601 steps, as LP601 and MA601 take
+    it: the search loads 601 where it is home, and ``MA601`` returns there. HM and HR truncated
+    to whole counts first: 300, 600 steps, and MA601 stopped a step past home."""
+    sep = ";" if model.startswith("PCIX") else " "
+
+    def home(position: int) -> tuple[float, int]:
+        h = Harness(model, world={"X": AxisWorld(start_position=start)})
+        h.send(sep.join(["AX", "ER1000,2000", "UU0.5", "VL500", f"{search}{position}", ""]))
+        h.run()
+        counted = int(h.send("RP" + sep).strip())
+        h.send(sep.join([f"MA{position}", "GO", ""]))
+        h.run()
+        assert h.errors() == []
+        return h.axis("X").phys(h.t), counted
+
+    at_600, counted_600 = home(600)
+    at_601, counted_601 = home(601)
+    assert counted_601 - counted_600 == 1  # (it was 0: both loaded 600)
+    assert at_601 == at_600  # home, both (601's was a step past it)

@@ -222,8 +222,10 @@ def _home(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
     ops = []
     for index, raw in items.items():
         axis = ix.machine.axes[index]
-        value = ix.convert(axis, raw, "dist") if raw is not None else 0.0
-        _check_target(ix, value, cmd.mnemonic)
+        # a position as LP's: with user units the fraction is kept for the encoder ratio
+        # (ER1000,2000 UU0.5 HM601 loads 601 steps, as LP601; truncated to whole counts first
+        # it loaded 600, and HM's "move absolute to the same position" went a step past home)
+        value = _steps(ix, axis, raw, cmd.mnemonic) if raw is not None else 0.0
         ops.append((axis, Op("HM", (value, False, direction), ix.cost(cell, axis))))
     ix.enqueue(ops)
 
