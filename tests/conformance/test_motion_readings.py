@@ -86,3 +86,30 @@ def test_pcix_mt_scales_to_the_longest_move_time_as_ml(move: str) -> None:
     h.until(1.102)
     assert not h.axis("X").moving and not h.axis("Y").moving
     assert h.send("RP;") == b"1000,10000,0,0\n\r"
+
+
+@pytest.mark.parametrize(("model", "sep"), MODELS)
+@pytest.mark.parametrize("jog", ["JG1000", "JG-1000", "JG1333", "JG-777"])
+@pytest.mark.parametrize("move", ["MR100", "MR-100", "MR0"])
+@pytest.mark.parametrize("phase", [0.0, 0.4, 0.93])
+def test_a_move_begun_during_a_jog_goes_its_steps_from_the_count_at_its_start(
+    model: str, sep: str, jog: str, move: str, phase: float
+) -> None:
+    """MR: "relative from the current position at the time the move is executed" (PC48 §6.7),
+    the position RP returns (§6.13). A GO reached while a jog runs starts its move on the next
+    tick (docs/decisions.md, "a GO during a jog"), the jog between two steps there: the counter
+    at the end is the move's distance from the count on that tick, either way, and the axis
+    rests on that whole step."""
+    h = Harness(model)
+    rate = h.board.model.sample_rate
+    h.send(sep.join(["AX", "AC100000", jog, ""]))
+    t0 = 0.3 + phase / rate
+    h.until(t0)
+    h.send(sep.join([move, "GO", ""]))
+    h.until(math.ceil(t0 * rate - 1e-9) / rate)
+    start = rp(h, sep)
+    h.run()
+    end = rp(h, sep)
+    assert end - start == int(move[2:])
+    assert h.axis("X").position(h.t) == end
+    assert h.errors() == []
