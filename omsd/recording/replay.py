@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from omsd.board import Board
 from omsd.config import BoardConfig
 from omsd.dialects import framing
 from omsd.models import UnknownModel, get_model
@@ -196,7 +197,21 @@ def resolve_board(
         changes["link"] = link
     if eos is not None:
         changes["eos"] = parse_eos(eos)
-    return dataclasses.replace(found, **changes) if changes else found
+    card = dataclasses.replace(found, **changes) if changes else found
+    return _fitted(card, f"{recording.path}: board {card.name} as a {card.model}")
+
+
+def _fitted(card: BoardConfig, where: str) -> BoardConfig:
+    """``card``, once its world, inputs and variant keys are known to fit its model (a header
+    or a configuration of a four-axis board, replayed with ``--model`` as a two-axis one);
+    :class:`RecordingError` otherwise, not the board's ``ValueError`` from the replay."""
+    try:
+        board = Board(card.personality(), now=0.0, world=dict(card.world))
+        for bit, high in card.inputs.items():
+            board.set_input(bit, high, 0.0)
+    except ValueError as exc:
+        raise RecordingError(f"{where}: {exc}") from None
+    return card
 
 
 def replay(recording: Recording, card: BoardConfig, tolerance: Tolerance) -> Result:

@@ -287,3 +287,36 @@ def test_options_that_make_no_replay_exit_2(
     assert capsys.readouterr().err.count("\n") == 1
     assert replay_main(str(path), "--model", "PC48-4E") == 1  # the card did not answer WY
     assert "(nothing)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("header", "options", "message"),
+    [
+        # a board of a configuration with a Z axis, replayed through a model without one
+        ({"world": {"Z": {"positive_limit": 600}}}, ("--model", "PC48-2E"), "no axis ['Z']"),
+        ({"inputs": {"40": True}}, ("--model", "PC48-2E"), "no I/O bit 40"),
+        ({"encoders": "XYZT"}, ("--model", "PC48-2E"), "has no axis TZ"),
+        ({"world": {"Q": {"home_low": 5}}}, (), "no axis ['Q']"),
+    ],
+)
+def test_a_world_that_does_not_fit_the_model_exits_2_with_one_line(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    header: dict[str, object],
+    options: tuple[str, ...],
+    message: str,
+) -> None:
+    # A recording's header (or --config's board) describes the world of a PC48-4E; replayed as
+    # another model (--model) whose axes or I/O bits it names do not exist. It used to end in a
+    # ValueError traceback from the board's construction, exit status 1.
+    path = tmp_path / "run.jsonl"
+    first = {"t": 0.0, "kind": "header", "format": 1, "clock": "monotonic", "model": "PC48-4E"}
+    path.write_text(
+        json.dumps({**first, **header})
+        + '\n{"t": 0.5, "kind": "traffic", "board": "card", "endpoint": "e", "dir": "in",'
+        ' "data": "WY", "hex": "5759"}\n'
+    )
+    assert replay_main(str(path), *options) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert captured.err.startswith("omsd replay: ") and message in captured.err
