@@ -44,6 +44,7 @@ import io
 import json
 import math
 import os
+import re
 import stat
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
@@ -110,7 +111,13 @@ class Recording:
     #: a daemon log's ``serving`` lines: board name -> (model, link)
     served: dict[str, tuple[str, str]] = field(default_factory=dict)
     origin: float = 0.0  # the file's ``t`` of time 0
-    truncated: bool = False  # the last line was cut short and left out
+    #: the numbers of the lines cut short (a writer killed while writing them) and left out
+    cut: list[int] = field(default_factory=list)
+
+    @property
+    def truncated(self) -> bool:
+        """Some line was cut short and left out."""
+        return bool(self.cut)
 
     @property
     def duration(self) -> float:
@@ -333,7 +340,7 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
     traffic: list[tuple[int, Traffic]] = []
     notes: list[tuple[float, str, str]] = []
     served: dict[str, tuple[str, str]] = {}
-    truncated = False
+    cut: list[int] = []
     with _open(name) as f:
         lines = _lines(f, name)
         for number, text in lines:
@@ -341,9 +348,9 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
             try:
                 record = json.loads(text)
             except json.JSONDecodeError as exc:
-                if next(lines, None) is None:
-                    truncated = True  # the writer was killed in the middle of its last line
-                    break
+                if cut_short(text, exc):
+                    cut.append(number)
+                    continue
                 raise RecordingError(f"{where}: not a JSON object: {exc.msg}") from None
             except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
                 raise RecordingError(f"{where}: not a JSON object: nested too deeply") from None
@@ -393,7 +400,32 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
         last = max(last, item.time - origin)  # a wall clock set back: keep the order
         chunks.append(Chunk(last, item.direction, item.data, item.endpoint))
     kept = [(max(0.0, t - origin), kind, text) for t, kind, text in notes]
-    return Recording(name, header, chosen, chunks, kept, served, origin, truncated)
+    return Recording(name, header, chosen, chunks, kept, served, origin, cut)
+
+
+_NUMBER_CUT = re.compile(r"[.eE][-+]?")
+_LITERALS = ("true", "false", "null", "-")
+
+
+def cut_short(text: str, exc: json.JSONDecodeError) -> bool:
+    """Whether ``text``, which ``json`` could not read (``exc``), is the beginning of a record
+    whose writer was killed while writing it: the last line of the file, or one the next
+    daemon ended before appending its own (:class:`omsd.telemetry.traffic.TrafficLog`). It is,
+    when the text is an object that ``json`` read up to where it stops: the end, or a string,
+    escape, number or ``null``/``true``/``false`` cut there. Anything else is no record."""
+    body = text.removesuffix("\n")
+    if not body.startswith("{"):
+        return False
+    rest = body[exc.pos :]
+    if not rest or exc.msg.startswith("Unterminated string"):
+        return True
+    if exc.msg.startswith("Invalid \\uXXXX escape"):
+        return re.fullmatch(r"u[0-9a-fA-F]{0,4}", rest) is not None
+    if exc.msg.startswith("Invalid \\escape"):
+        return rest == "\\"
+    if exc.msg.startswith("Expecting ',' delimiter") and _NUMBER_CUT.fullmatch(rest):
+        return body[exc.pos - 1].isdigit()
+    return exc.msg == "Expecting value" and any(word.startswith(rest) for word in _LITERALS)
 
 
 #: The longest line read, in characters: far more than any record (a traffic record of the

@@ -75,8 +75,13 @@ class Result:
         )
         head = "no differences" if self.ok else f"{_plural(len(self.differences), 'difference')}"
         text = f"{head}: {what} ({board}; {tolerance}), replayed in {self.elapsed:.2f} s"
-        if self.recording.truncated:
-            text += f"\nnote: the last line of {self.recording.path} was cut short and left out"
+        cut = self.recording.cut
+        if cut:
+            which = f"line {cut[0]}" if len(cut) == 1 else f"lines {', '.join(map(str, cut))}"
+            text += (
+                f"\nnote: {which} of {self.recording.path} (a writer killed while writing)"
+                f" {'was' if len(cut) == 1 else 'were'} cut short and left out"
+            )
         return text
 
     def table(self) -> str:
@@ -118,6 +123,7 @@ class Result:
             "answers": self.counts.answers,
             "markers": self.counts.events,
             "truncated": self.recording.truncated,
+            "cut_lines": self.recording.cut,
             "ok": self.ok,
             "differences": [
                 {

@@ -20,9 +20,11 @@ from omsd.recording.format import (
     RecordingWriter,
     board_from_record,
     board_record,
+    cut_short,
     parse_eos,
     read_recording,
 )
+from omsd.telemetry.lines import traffic_json
 from omsd.telemetry.traffic import Direction, TrafficLog
 
 BOARD = BoardConfig(
@@ -229,6 +231,83 @@ def test_binary_garbage_is_one_line(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match=r"garbage.bin:1: not a JSON object") as caught:
         read_recording(garbage)
     assert "\n" not in str(caught.value)
-    garbage.write_bytes(b"\xff\xfe\x00" * 1000)  # one line cut short, and nothing else
-    with pytest.raises(RecordingError, match=r"garbage.bin: no traffic in the file"):
+    # no line cut short of a record either: it said "no traffic in the file" (the one line taken
+    # for the last line of a record, cut short)
+    garbage.write_bytes(b"\xff\xfe\x00" * 1000)
+    with pytest.raises(RecordingError, match=r"garbage.bin:1: not a JSON object"):
         read_recording(garbage)
+
+
+def test_a_line_cut_by_a_crash_then_ended_by_the_next_daemon_is_left_out(tmp_path: Path) -> None:
+    # A daemon killed while writing a line; the next one, appending to the same --log, ends the
+    # cut line before its own (TrafficLog: "the first line ... of the next daemon is never glued
+    # to a cut one"). The cut line is then in the middle of the file, with a line end: it used to
+    # stop the replay, 'FILE:3: not a JSON object: Invalid control character at', exit 2.
+    path = tmp_path / "traffic.jsonl"
+    clock = iter([1.7e9 + i for i in range(100)])
+    with TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda: next(clock)) as log:
+        log.info("serving xy PC48-4E driver tcp 127.0.0.1:7001")
+        log.traffic(1.7e9 + 10, "xy", "tcp:127.0.0.1:7001 #1 (a)", Direction.IN, b"WY")
+        log.traffic(1.7e9 + 11, "xy", "tcp:127.0.0.1:7001 #1 (a)", Direction.OUT, b"PC48\n")
+    with path.open("r+b") as f:
+        f.truncate(path.stat().st_size - 9)  # killed 9 characters before the end of its line
+    with TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda: 1.7e9 + 20) as log:
+        log.info("serving xy PC48-4E driver tcp 127.0.0.1:7001")
+        log.traffic(1.7e9 + 21, "xy", "tcp:127.0.0.1:7001 #1 (b)", Direction.IN, b"RP")
+    recording = read_recording(path)
+    assert [c.data for c in recording.chunks] == [b"WY", b"RP"]
+    assert recording.cut == [3] and recording.truncated
+    from omsd.recording.replay import replay_file
+
+    assert "note: line 3 of " in replay_file(path).summary()
+
+
+def cut_prefixes() -> list[str]:
+    """Every way a writer can be cut short in the middle of a record: each prefix of lines
+    that hold escapes, negative numbers, exponents, null, true."""
+    records = [
+        traffic_json(1.7e9 + 0.125, "xy", "tcp #1", "out", bytes(range(256))),
+        traffic_json(1e-05, "b", "pty", "in", b'\\"\n\r\xff'),
+        json.dumps({"t": 1.5, "kind": "header", "format": 1, "line": None, "x": -1.5e-7}),
+        json.dumps({"t": 2, "kind": "info", "message": "w", "flag": True, "other": False}),
+    ]
+    return [r.rstrip("\n")[:k] for r in records for k in range(1, len(r.rstrip("\n")))]
+
+
+def test_every_prefix_of_a_record_is_a_line_cut_short() -> None:
+    for prefix in cut_prefixes():
+        for text in (prefix, prefix + "\n"):  # the last line, or one the next daemon ended
+            with pytest.raises(json.JSONDecodeError) as caught:
+                json.loads(text)
+            assert cut_short(text, caught.value), text
+
+
+@pytest.mark.parametrize("cut_at", ["middle", "end", "end without its line end"])
+def test_a_line_cut_short_is_left_out_wherever_it_is(tmp_path: Path, cut_at: str) -> None:
+    path = tmp_path / "session.jsonl"
+    write(path)
+    lines = path.read_text().splitlines(keepends=True)
+    for prefix in cut_prefixes()[::37]:
+        cut = prefix if cut_at == "end without its line end" else prefix + "\n"
+        text = [*lines[:2], cut, *lines[2:]] if cut_at == "middle" else [*lines, cut]
+        path.write_text("".join(text))
+        recording = read_recording(path)
+        assert len(recording.chunks) == 2, prefix
+        assert recording.cut == [3 if cut_at == "middle" else 5], prefix
+
+
+@pytest.mark.parametrize(
+    "bad", ["{bad", "{not json", '{"t": 1} junk', "garbage", '{"t": 1,, }', "[]x", '{"t": 1.x}']
+)
+@pytest.mark.parametrize("line_end", ["\n", ""])
+def test_a_line_that_is_not_json_is_an_error_even_the_last(
+    tmp_path: Path, bad: str, line_end: str
+) -> None:
+    # only a prefix of a record is a line cut short; wrong JSON on the last line was taken for
+    # one, left out with a note, and the replay went on with exit status 0
+    path = tmp_path / "session.jsonl"
+    write(path)
+    with path.open("a") as f:
+        f.write(bad + line_end)
+    with pytest.raises(RecordingError, match=r"session.jsonl:5: not a JSON object"):
+        read_recording(path)
