@@ -33,6 +33,11 @@ said for a client that has gone (the log's ``(gone: ...)``) belongs to that clie
 the board's own output (session 0) to the last client that wrote, as the service routes it. The
 log's ``disconnected`` / ``closed`` / ``takes over`` lines end a session (its held input is
 dropped, :meth:`omsd.link.Link.drop_input`).
+
+A daemon's log that goes on after a restart (omsd appends to its ``--log``; a new ``serving``
+line of the board after its traffic, :attr:`omsd.recording.format.Recording.restarts`) has the
+board at power-up again at that time, behind a new link, with every session of the old run
+ended, as the new daemon had it.
 """
 
 from __future__ import annotations
@@ -94,15 +99,10 @@ def motion_at(board: Board, t: float, window: float) -> tuple[float, float]:
 
 class _Run:
     def __init__(self, recording: Recording, card: BoardConfig, window: float) -> None:
-        self.board = Board(card.personality(), now=0.0, world=dict(card.world))
-        for bit, high in card.inputs.items():
-            self.board.set_input(bit, high, 0.0)
-        self.link: Link = make_link(
-            card.link, self.board, eos=card.eos, buffer_size=card.buffer_size
-        )
+        self.card = card
+        self.power_up(0.0)
         self.window = window
         self.out: dict[str, list[Piece]] = {}
-        self.pending: deque[list[object]] = deque()  # [session, bytes]
         self.label: dict[int, str] = {}
         self.active = ONE
         self.command: dict[str, int] = {}
@@ -112,6 +112,18 @@ class _Run:
         # (time, speed, acceleration) of the motion just before each run: a move that ends at a
         # deadline is gone from the axes once run, but was there within the window
         self.recent: deque[tuple[float, float, float]] = deque()
+
+    def power_up(self, t: float) -> None:
+        """A board at power-up at ``t``, behind a new link: what the host had not yet had taken
+        is gone with the old one."""
+        card = self.card
+        self.board = Board(card.personality(), now=t, world=dict(card.world))
+        for bit, high in card.inputs.items():
+            self.board.set_input(bit, high, t)
+        self.link: Link = make_link(
+            card.link, self.board, eos=card.eos, buffer_size=card.buffer_size
+        )
+        self.pending: deque[list[object]] = deque()  # [session, bytes]
 
     def motion(self, t: float) -> tuple[float, float]:
         """The motion around ``t``: now, and just before the runs of the last ``window``."""
@@ -236,11 +248,17 @@ def emulate(
             ended = _session_end(recording.board, kind, message)
             if ended is not None:
                 actions.append((t, next(order), "end", ended, b""))
+        for t in recording.restarts:  # before any chunk of the same time: those are the new run's
+            actions.append((t, -1, "restart", ONE, b""))
     actions.sort(key=lambda a: (a[0], a[1]))
     sessions: dict[str, int] = {}
     numbers = itertools.count(1)
     for at, _, kind, stream, data in actions:
         run.until(at)
+        if kind == "restart":
+            run.power_up(at)
+            sessions.clear()
+            continue
         if kind == "end":
             session = sessions.pop(stream, None)
             if session is not None:

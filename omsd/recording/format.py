@@ -32,8 +32,10 @@ A recording is a JSON-lines file, one object per line, as the daemon's traffic l
 :func:`read_recording` reads a recording or a daemon's ``--log`` file. A log may hold several
 boards (the ``board`` field; one is chosen) and several clients (the ``endpoint`` field: each is
 a stream of its own, as each was a session of the daemon); its ``serving BOARD MODEL LINK ...``
-lines say each board's model and link. A last line cut short (a recorder or a daemon killed
-while writing) is ignored and said so; any other line that is not a record is an error.
+lines say each board's model and link, and one after the board's traffic that a new daemon,
+appending to the same file, started it again at power-up (``restarts``). A line cut short (a
+recorder or a daemon killed while writing it: the last, or one the next daemon ended) is left
+out and said so (:func:`cut_short`); any other line that is not a record is an error.
 :class:`RecordingError` is one line, ``FILE:LINE: what``.
 """
 
@@ -113,6 +115,8 @@ class Recording:
     origin: float = 0.0  # the file's ``t`` of time 0
     #: the numbers of the lines cut short (a writer killed while writing them) and left out
     cut: list[int] = field(default_factory=list)
+    #: times a daemon's log says a new daemon began serving the board (at power-up)
+    restarts: list[float] = field(default_factory=list)
 
     @property
     def truncated(self) -> bool:
@@ -340,6 +344,7 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
     traffic: list[tuple[int, Traffic]] = []
     notes: list[tuple[float, str, str]] = []
     served: dict[str, tuple[str, str]] = {}
+    serving: list[tuple[int, float, str]] = []  # (line, t, board) of the serving lines
     cut: list[int] = []
     with _open(name) as f:
         lines = _lines(f, name)
@@ -377,6 +382,7 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
                 parts = message.split()
                 if kind == "info" and len(parts) >= 4 and parts[0] == "serving":
                     served[parts[1]] = (parts[2], parts[3])
+                    serving.append((number, float(t), parts[1]))
     if not traffic:
         raise RecordingError(f"{name}: no traffic in the file")
     boards = list(dict.fromkeys(item.board for _, item in traffic))
@@ -400,7 +406,35 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
         last = max(last, item.time - origin)  # a wall clock set back: keep the order
         chunks.append(Chunk(last, item.direction, item.data, item.endpoint))
     kept = [(max(0.0, t - origin), kind, text) for t, kind, text in notes]
-    return Recording(name, header, chosen, chunks, kept, served, origin, cut)
+    restarts = [] if header is not None else _restarts(traffic, serving, chosen, origin)
+    return Recording(name, header, chosen, chunks, kept, served, origin, cut, restarts)
+
+
+def _restarts(
+    traffic: list[tuple[int, Traffic]],
+    serving: list[tuple[int, float, str]],
+    board: str,
+    origin: float,
+) -> list[float]:
+    """When, in a daemon's log, ``board`` was served by a new daemon (omsd appends to its log:
+    restarted on the same file, it starts the board at power-up): the time of the first of
+    its ``serving`` lines after traffic of the board, in the chunks' times (never before the
+    traffic ahead of it, as the chunks keep their order when the wall clock is set back)."""
+    lines = sorted(
+        [(number, item.time, True) for number, item in traffic if item.board == board]
+        + [(number, t, False) for number, t, name in serving if name == board]
+    )
+    restarts: list[float] = []
+    last = 0.0
+    since = False  # traffic since the board was last served
+    for _, t, is_traffic in lines:
+        last = max(last, t - origin)
+        if is_traffic:
+            since = True
+        elif since:
+            restarts.append(last)
+            since = False
+    return restarts
 
 
 _NUMBER_CUT = re.compile(r"[.eE][-+]?")

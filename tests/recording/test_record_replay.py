@@ -320,3 +320,29 @@ def test_a_world_that_does_not_fit_the_model_exits_2_with_one_line(
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err.count("\n") == 1
     assert captured.err.startswith("omsd replay: ") and message in captured.err
+
+
+def test_a_daemon_restarted_on_the_same_log_replays_from_power_up(tmp_path: Path) -> None:
+    # omsd appends to its --log: a daemon restarted (systemd's Restart= after a crash, or by
+    # hand) on the same file starts its board at power-up, and its serving line says so. The
+    # replay carried the first run's board on: 'AX RP' answered 0 by the new daemon was
+    # replayed as 4000, one difference in a log omsd itself had written.
+    import io
+
+    from omsd.telemetry.traffic import Direction, TrafficLog
+
+    path = tmp_path / "traffic.jsonl"
+    first, second = "tcp:127.0.0.1:7001 #1 (a)", "tcp:127.0.0.1:7001 #1 (b)"
+    for t, lines in (
+        (100.0, [(first, b"AX LP4000 RP\n", b"4000\n")]),
+        (200.0, [(second, b"AX RP\n", b"0\n"), (second, b"LP-7 RP\n", b"-7\n")]),
+    ):
+        with TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda t=t: t) as log:
+            log.info("serving xy PC48-4E driver tcp 127.0.0.1:7001")
+            for k, (endpoint, command, answer) in enumerate(lines):
+                log.traffic(t + 1 + k, "xy", endpoint, Direction.IN, command)
+                log.traffic(t + 1.001 + k, "xy", endpoint, Direction.OUT, answer)
+            log.info("stopped")
+    result = replay_file(path)
+    assert result.ok, result.report()
+    assert result.counts.answers == 3
