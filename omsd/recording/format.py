@@ -42,12 +42,14 @@ out and said so (:func:`cut_short`); any other line that is not a record is an e
 from __future__ import annotations
 
 import errno
+import gzip
 import io
 import json
 import math
 import os
 import re
 import stat
+import zlib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from enum import Enum
@@ -478,7 +480,8 @@ _KINDS = (
 def _open(name: str) -> io.TextIOWrapper:
     """``name`` opened for reading as text, once it is known to be a regular file or a pipe
     (``<(zcat run.jsonl.gz)``; a named one is opened without waiting for a writer, and with
-    none read as empty): a device (/dev/zero) or a directory is refused."""
+    none read as empty): a device (/dev/zero) or a directory is refused. A gzip file (a
+    rotated log, ``traffic.jsonl.1.gz``) is read through gzip."""
     try:
         fd = os.open(name, os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY | os.O_CLOEXEC)
     except OSError as exc:
@@ -491,18 +494,43 @@ def _open(name: str) -> io.TextIOWrapper:
             what = next((what for test, what in _KINDS if test(mode)), "not a regular file")
             raise RecordingError(f"{name}: not a recording: {what}, not a file")
         os.set_blocking(fd, True)
-        return open(fd, encoding="utf-8", errors="replace")
     except BaseException:
         os.close(fd)
         raise
+    return _text(open(fd, "rb"), name)
+
+
+def _text(raw: io.BufferedReader, name: str) -> io.TextIOWrapper:
+    """``raw`` read as text, through gzip when it begins as a gzip file does."""
+    try:
+        compressed = raw.peek(len(_GZIP))[: len(_GZIP)] == _GZIP
+    except OSError as exc:
+        raw.close()
+        raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
+    if compressed:
+        return io.TextIOWrapper(gzip.GzipFile(fileobj=raw, mode="rb"), "utf-8", "replace")
+    return io.TextIOWrapper(raw, encoding="utf-8", errors="replace")
+
+
+_GZIP = b"\x1f\x8b"
+"""The first bytes of a gzip file (RFC 1952 §2.3.1): logrotate's ``compress``, ``gzip -k``."""
 
 
 def _lines(f: io.TextIOWrapper, name: str) -> Iterator[tuple[int, str]]:
     """The numbered lines of ``f`` that are not blank, each read at most :data:`MAX_LINE`
-    characters far (:class:`RecordingError` for a longer one)."""
+    characters far (:class:`RecordingError` for a longer one). Compressed data that ends
+    before its end marker (a copy or a compression stopped part way) ends in a line cut short
+    (``{``, which :func:`cut_short` says is one): the lines before it are whole."""
     number = 0
     try:
-        while text := f.readline(MAX_LINE + 1):
+        while True:
+            try:
+                text = f.readline(MAX_LINE + 1)
+            except EOFError:  # gzip: "Compressed file ended before the end-of-stream marker"
+                yield number + 1, "{"
+                return
+            if not text:
+                return
             number += 1
             if len(text) > MAX_LINE:
                 raise RecordingError(
@@ -510,8 +538,9 @@ def _lines(f: io.TextIOWrapper, name: str) -> Iterator[tuple[int, str]]:
                 )
             if text.strip():
                 yield number, text
-    except OSError as exc:
-        raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
+    except (OSError, zlib.error) as exc:  # (gzip.BadGzipFile is an OSError)
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise RecordingError(f"cannot read {name}: {why}") from None
 
 
 def _header(record: dict[str, Any], where: str) -> dict[str, Any]:

@@ -79,8 +79,8 @@ class Result:
         if cut:
             which = f"line {cut[0]}" if len(cut) == 1 else f"lines {', '.join(map(str, cut))}"
             text += (
-                f"\nnote: {which} of {self.recording.path} (a writer killed while writing)"
-                f" {'was' if len(cut) == 1 else 'were'} cut short and left out"
+                f"\nnote: {which} of {self.recording.path} {'was' if len(cut) == 1 else 'were'}"
+                " cut short (its writer stopped part way) and left out"
             )
         return text
 

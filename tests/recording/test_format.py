@@ -311,3 +311,42 @@ def test_a_line_that_is_not_json_is_an_error_even_the_last(
         f.write(bad + line_end)
     with pytest.raises(RecordingError, match=r"session.jsonl:5: not a JSON object"):
         read_recording(path)
+
+
+def test_a_compressed_log_is_read_as_it_is(tmp_path: Path) -> None:
+    # logrotate's compress leaves traffic.jsonl.1.gz: it was 'not a JSON object: Expecting
+    # value' (the gzip bytes read as text), and only <(zcat FILE) replayed it
+    import gzip
+
+    path = tmp_path / "session.jsonl"
+    write(path)
+    expected = read_recording(path)
+    packed = tmp_path / "session.jsonl.gz"
+    packed.write_bytes(gzip.compress(path.read_bytes()))
+    got = read_recording(packed)
+    assert got.chunks == expected.chunks and got.header == expected.header and not got.cut
+    # through a pipe too (cat session.jsonl.gz | omsd replay /dev/stdin)
+    r, w = os.pipe()
+    writer = threading.Thread(target=lambda: (os.write(w, packed.read_bytes()), os.close(w)))
+    writer.start()
+    try:
+        assert read_recording(f"/dev/fd/{r}").chunks == expected.chunks
+    finally:
+        writer.join()
+        os.close(r)
+    # a compressed file cut short (a copy or a compression that was stopped): what is there
+    long = tmp_path / "long.jsonl"
+    writer = RecordingWriter(long)
+    writer.header(100.0, 1.7e9, BOARD, to="tcp:127.0.0.1:7048", line=None, listen="tcp:x:1")
+    for k in range(400):
+        writer.traffic(100.5 + k / 7, "xy", "tcp:x:1 #1", Direction.IN, b"AX MR%d GO" % k)
+    writer.close()
+    whole = gzip.compress(long.read_bytes())
+    packed.write_bytes(whole[: len(whole) // 2])
+    recording = read_recording(packed)
+    assert 0 < len(recording.chunks) < 400 and recording.truncated
+    # not gzip after its magic: one line
+    packed.write_bytes(b"\x1f\x8b" + bytes(range(256)))
+    with pytest.raises(RecordingError, match=r"^cannot read .*session.jsonl.gz: ") as caught:
+        read_recording(packed)
+    assert "\n" not in str(caught.value)
