@@ -37,7 +37,8 @@ dropped, :meth:`omsd.link.Link.drop_input`).
 A daemon's log that goes on after a restart (omsd appends to its ``--log``; a new ``serving``
 line of the board after its traffic, :attr:`omsd.recording.format.Recording.restarts`) has the
 board at power-up again at that time, behind a new link, with every session of the old run
-ended, as the new daemon had it.
+ended, as the new daemon had it. ``BOARD: power cycled (control API)`` (``omsd ctl reset``)
+power-cycles it as the daemon did, the sessions going on.
 """
 
 from __future__ import annotations
@@ -57,6 +58,9 @@ ONE = ""
 """The stream of a recording (one conversation)."""
 
 _GONE = "(gone: "
+
+POWER_CYCLED = "power cycled (control API)"
+"""What a daemon's log says, after ``BOARD: ``, when ``omsd ctl reset`` power-cycled the board."""
 
 #: A piece of one side's output: (time, bytes, index of the host chunk it follows, speed,
 #: acceleration).
@@ -248,6 +252,8 @@ def emulate(
             ended = _session_end(recording.board, kind, message)
             if ended is not None:
                 actions.append((t, next(order), "end", ended, b""))
+            elif kind == "warning" and message == f"{recording.board}: {POWER_CYCLED}":
+                actions.append((t, next(order), "power cycle", ONE, b""))
         for t in recording.restarts:  # before any chunk of the same time: those are the new run's
             actions.append((t, -1, "restart", ONE, b""))
     actions.sort(key=lambda a: (a[0], a[1]))
@@ -258,6 +264,12 @@ def emulate(
         if kind == "restart":
             run.power_up(at)
             sessions.clear()
+            continue
+        if kind == "power cycle":  # as BoardService.power_cycle: the sessions go on
+            run.board.power_cycle(at)
+            run.link.reset_input()
+            run.pending.clear()
+            run.step(at)
             continue
         if kind == "end":
             session = sessions.pop(stream, None)

@@ -346,3 +346,33 @@ def test_a_daemon_restarted_on_the_same_log_replays_from_power_up(tmp_path: Path
     result = replay_file(path)
     assert result.ok, result.report()
     assert result.counts.answers == 3
+
+
+def test_a_power_cycle_from_the_control_api_is_replayed(tmp_path: Path) -> None:
+    # 'omsd ctl reset' power-cycles the board under a connected client and the log says so
+    # ('xy: power cycled (control API)'); the replay went on with the board as it was: 'AX RP'
+    # answered 0 after the reset was replayed as 4000
+    import io
+
+    from omsd.telemetry.traffic import Direction, TrafficLog
+
+    path = tmp_path / "traffic.jsonl"
+    client = "tcp:127.0.0.1:7001 #1 (a)"
+    with TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda: 100.0) as log:
+        log.info("serving xy PC48-4E driver tcp 127.0.0.1:7001")
+        log.traffic(101.0, "xy", client, Direction.IN, b"AX LP4000 RP\n")
+        log.traffic(101.001, "xy", client, Direction.OUT, b"4000\n")
+    with TrafficLog("off", file=path, stream=io.StringIO(), clock=lambda: 102.0) as log:
+        log.warning("xy: power cycled (control API)")
+        log.traffic(103.0, "xy", client, Direction.IN, b"AX RP\n")
+        log.traffic(103.001, "xy", client, Direction.OUT, b"0\n")
+    result = replay_file(path)
+    assert result.ok, result.report()
+    assert result.counts.answers == 2
+    # the words the replay looks for are those the control server logs
+    import inspect
+
+    from omsd.control import server
+    from omsd.recording.emulate import POWER_CYCLED
+
+    assert f'log.warning(f"{{service.name}}: {POWER_CYCLED}")' in inspect.getsource(server)
