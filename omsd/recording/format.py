@@ -337,10 +337,15 @@ class RecordingWriter:
 _MESSAGES = ("info", "warning", "error")
 
 
-def read_recording(path: str | Path, board: str | None = None) -> Recording:
+def read_recording(
+    path: str | Path, board: str | None = None, *, renamed: bool = False
+) -> Recording:
     """The traffic of one board in ``path`` (a recording, or a daemon's ``--log`` file). With
     several boards in a log, ``board`` says which; :class:`RecordingError` otherwise, and for a
-    file that is not a recording (one line, ``FILE:LINE: what``)."""
+    file that is not a recording (one line, ``FILE:LINE: what``). ``renamed``: ``board`` is
+    also the board of a configuration to replay the card as (``--config --board``), so a
+    recording, which holds one card's traffic under the name it was recorded with, is read
+    whatever ``board`` is."""
     name = str(path)
     header: dict[str, Any] | None = None
     traffic: list[tuple[int, Traffic]] = []
@@ -388,7 +393,9 @@ def read_recording(path: str | Path, board: str | None = None) -> Recording:
     if not traffic:
         raise RecordingError(f"{name}: no traffic in the file")
     boards = list(dict.fromkeys(item.board for _, item in traffic))
-    if board is not None:
+    if renamed and header is not None and board not in boards and len(boards) == 1:
+        chosen = boards[0]  # a recording is one card's, replayed as ``board``
+    elif board is not None:
         if board not in boards:
             raise RecordingError(f"{name}: no traffic of board {board} (it has {_list(boards)})")
         chosen = board

@@ -276,7 +276,7 @@ def replay_file(
 ) -> Result:
     """Read ``path`` and replay it (:class:`RecordingError` for a file or options that do not
     make a replay)."""
-    recording = read_recording(path, board)
+    recording = read_recording(path, board, renamed=config is not None)
     card = resolve_board(recording, model=model, link=link, eos=eos, config=config, board=board)
     return replay(recording, card, tolerance or Tolerance())
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from omsd.recording.cli import add_replay_parser, run_replay
+from omsd.recording.format import RecordingError
 from omsd.recording.replay import replay_file
 from omsd.testing import assert_replays
 
@@ -376,3 +377,32 @@ def test_a_power_cycle_from_the_control_api_is_replayed(tmp_path: Path) -> None:
     from omsd.recording.emulate import POWER_CYCLED
 
     assert f'log.warning(f"{{service.name}}: {POWER_CYCLED}")' in inspect.getsource(server)
+
+
+def test_a_recording_replays_as_a_board_of_a_configuration_of_several(tmp_path: Path) -> None:
+    # README: 'omsd replay FILE builds the board the header names (or --model, --config FILE
+    # [--board NAME] ...)'. A card recorded without --config (its board is 'card') replayed as
+    # board xy of the lab's file of two boards: --board xy was taken for the traffic's board
+    # too, 'no traffic of board xy (it has card)', exit 2, and without it 'several boards'.
+    path = tmp_path / "run.jsonl"
+    head = {"t": 0.0, "kind": "header", "format": 1, "clock": "monotonic", "model": "PC48-4E"}
+    path.write_text(
+        json.dumps({**head, "board": "card"})
+        + '\n{"t": 0.5, "kind": "traffic", "board": "card", "endpoint": "e", "dir": "in",'
+        ' "data": "AX RP\\n", "hex": "41582052500a"}'
+        + '\n{"t": 0.501, "kind": "traffic", "board": "card", "endpoint": "e", "dir": "out",'
+        ' "data": "0\\n", "hex": "300a"}\n'
+    )
+    config = tmp_path / "lab.toml"
+    config.write_text(
+        '[[board]]\nname = "z"\nmodel = "PCIX-400"\ntcp = "127.0.0.1:0"\n'
+        '[[board]]\nname = "xy"\nmodel = "PC48-4E"\ntcp = "127.0.0.1:0"\n'
+        "[board.axes.X]\nstart_position = 5\n"
+    )
+    result = replay_file(path, config=config, board="xy")
+    assert result.card.name == "xy" and result.card.model == "PC48-4E"
+    assert result.card.world["X"].start_position == 5
+    assert result.ok, result.report()
+    # without --config, --board names the traffic's board, which a recording has one of
+    with pytest.raises(RecordingError, match=r"no traffic of board xy \(it has card\)"):
+        replay_file(path, board="xy")
