@@ -205,7 +205,7 @@ def run_record(args: argparse.Namespace) -> int:
     import asyncio
     from pathlib import Path
 
-    from omsd.recording.format import RecordingError
+    from omsd.recording.format import RecordingError, fitted
     from omsd.recording.record import Recorder, StartError, parse_card, record
 
     def fail(message: str) -> int:
@@ -235,6 +235,7 @@ def run_record(args: argparse.Namespace) -> int:
             args.record_link if args.record_config else link,
             args.record_eos,
         )
+        fitted(board, f"board {board.name} as a {board.model}")
     except RecordingError as exc:
         return fail(str(exc))
     pty = Path(args.record_pty).absolute() if args.record_pty is not None else None

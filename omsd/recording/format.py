@@ -57,7 +57,7 @@ from pathlib import Path
 from typing import Any
 
 from omsd import __version__
-from omsd.board import AxisWorld
+from omsd.board import AxisWorld, Board
 from omsd.config import BoardConfig
 from omsd.defaults import BUFFER_SIZE_MAX, BUFFER_SIZE_MIN, LINKS
 from omsd.files import FILE_MODE
@@ -221,6 +221,19 @@ def board_from_record(record: Mapping[str, Any], where: str = "header") -> Board
         firmware=_optional(record, "firmware", str),
         max_queries=_optional(record, "max_queries", bool),
     )
+
+
+def fitted(card: BoardConfig, where: str) -> BoardConfig:
+    """``card``, once its world, inputs and variant keys are known to fit its model (a header
+    or a configuration of a four-axis board, with ``--model`` a two-axis one);
+    :class:`RecordingError` otherwise, not the board's ``ValueError`` in the middle of a run."""
+    try:
+        board = Board(card.personality(), now=0.0, world=dict(card.world))
+        for bit, high in card.inputs.items():
+            board.set_input(bit, high, 0.0)
+    except ValueError as exc:
+        raise RecordingError(f"{where}: {exc}") from None
+    return card
 
 
 def config_board(path: str | Path, name: str | None, fallback: str | None = None) -> BoardConfig:
@@ -594,6 +607,7 @@ __all__ = [
     "board_from_record",
     "board_record",
     "config_board",
+    "fitted",
     "parse_eos",
     "read_recording",
 ]

@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from omsd.board import Board
 from omsd.config import BoardConfig
 from omsd.dialects import framing
 from omsd.models import UnknownModel, get_model
@@ -37,6 +36,7 @@ from omsd.recording.format import (
     RecordingError,
     board_from_record,
     config_board,
+    fitted,
     parse_eos,
     read_recording,
 )
@@ -204,20 +204,7 @@ def resolve_board(
     if eos is not None:
         changes["eos"] = parse_eos(eos)
     card = dataclasses.replace(found, **changes) if changes else found
-    return _fitted(card, f"{recording.path}: board {card.name} as a {card.model}")
-
-
-def _fitted(card: BoardConfig, where: str) -> BoardConfig:
-    """``card``, once its world, inputs and variant keys are known to fit its model (a header
-    or a configuration of a four-axis board, replayed with ``--model`` as a two-axis one);
-    :class:`RecordingError` otherwise, not the board's ``ValueError`` from the replay."""
-    try:
-        board = Board(card.personality(), now=0.0, world=dict(card.world))
-        for bit, high in card.inputs.items():
-            board.set_input(bit, high, 0.0)
-    except ValueError as exc:
-        raise RecordingError(f"{where}: {exc}") from None
-    return card
+    return fitted(card, f"{recording.path}: board {card.name} as a {card.model}")
 
 
 def replay(recording: Recording, card: BoardConfig, tolerance: Tolerance) -> Result:

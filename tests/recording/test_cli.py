@@ -174,6 +174,15 @@ BAD = [
     (["--to", "tcp:127.0.0.1:1", "--tcp", "0", "--model", "PC99"], "--model: unknown board"),
     (["--to", "tcp:127.0.0.1:1", "--pty", "/nonexistent/dir/oms"], "--pty: no directory"),
     (["--to", "tcp:127.0.0.1:1", "--tcp", "0", "--pty", "x"], "not allowed with argument"),
+    # a board whose world names an axis the model given does not have: the header it would
+    # write replays as no board (it was written, and the recording started)
+    (
+        [
+            *("--to", "tcp:127.0.0.1:1", "--tcp", "0", "--config", "config/omsd.toml"),
+            *("--board", "slits", "--model", "PC48-4E"),
+        ],
+        "board slits as a PC48-4E: no axis ['U'] on a PC48-4E",
+    ),
 ]
 
 
