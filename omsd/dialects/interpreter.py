@@ -241,7 +241,7 @@ class Interpreter(Operands, LoopStacks):
                 # let the axes run what was queued before the next command is read; a report or
                 # an axis selection queues nothing and leaves them as they were
                 if isinstance(token, Command) and token.mnemonic not in reports:
-                    self._run_queues(t)
+                    machine.executor.run_queues(t)
                 progressed = True
                 continue
             buffer = self.buffer
@@ -281,7 +281,7 @@ class Interpreter(Operands, LoopStacks):
                             if not self.run_bare(command, t):
                                 return progressed
                             if command.mnemonic not in reports:
-                                self._run_queues(t)
+                                machine.executor.run_queues(t)
                             break
                     tokens = feed(buffer.popleft())
                     if tokens:
@@ -293,30 +293,6 @@ class Interpreter(Operands, LoopStacks):
                 if tokens:
                     self.pending.extend((token, 0) for token in tokens)
                     break
-
-    def _run_queues(self, t: float) -> None:
-        """Let the axes run what was queued, before the next command is read. An AA meeting
-        point (an AA GO, WD, WG) that the last of its axes reaches in this pass lets the ones
-        that reached it before go on at this same instant ("The synchronized modes (AA) insert
-        special wait opcodes that allow the axes to be synchronized", PC48 §6.1): they are
-        stepped again, so that a report typed next (RQ) sees every axis past it."""
-        machine = self.machine
-        step = machine.executor.step
-        axes = machine.axes
-        for _ in range(10_000):
-            for axis in axes:
-                step(axis, t)
-            for axis in axes:
-                wait = axis.wait
-                if (
-                    wait is not None
-                    and wait.kind == "group"
-                    and wait.group is not None
-                    and wait.group.released(wait.round)
-                ):
-                    break
-            else:
-                return
 
     def _capture(self, b: int, t: float) -> None:
         capture = self.capture

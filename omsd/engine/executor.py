@@ -112,6 +112,25 @@ class Executor:
                 q.advance()
         return progressed
 
+    def run_queues(self, t: float) -> None:
+        """Let every axis run what was queued, as the interpreter does before it reads the next
+        command. An AA meeting point (an AA GO, WD, WG) that the last of its axes reaches in
+        this pass lets the ones that reached it before go on at this same instant ("The
+        synchronized modes (AA) insert special wait opcodes that allow the axes to be
+        synchronized", PC48 §6.1): they are stepped again, so that a report typed next (RQ)
+        sees every axis past it."""
+        step = self.step
+        axes = self.machine.axes
+        for _ in range(10_000):  # (a bound: each pass frees a meeting point, or it returns)
+            for axis in axes:
+                step(axis, t)
+            for axis in axes:
+                w = axis.wait
+                if w is not None and w.kind == "group" and w.group and w.group.released(w.round):
+                    break
+            else:
+                return
+
     def satisfied(self, axis: Axis, w: Wait, t: float) -> bool:
         """The wait ``w`` of the axis's queue is over at ``t`` (and its step goes on)."""
         if w.kind == "motion":
