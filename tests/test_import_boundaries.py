@@ -129,6 +129,7 @@ NOT_FOR_A_PC48 = (
     "omsd.engine.contour",
     "omsd.transport.serial",
     "omsd.transport.rfc2217",
+    "omsd.transport.access_server",
     "omsd.models.pc46",
     "omsd.models.vs4",
     "omsd.models.pcix",

@@ -5,14 +5,16 @@ network.
 A client (pyserial's ``serial_for_url("rfc2217://HOST:PORT")``, a Windows COM-port redirector,
 ``socat``'s or ``ser2net``'s) connects, negotiates the telnet options and sets the port as it
 would a local one: baud rate, data bits, parity, stop bits, flow control, DTR and RTS, a break.
-The telnet side is pyserial's own server code (``serial.rfc2217.PortManager``): it answers the
-negotiation, takes the telnet commands out of what the client sends (:meth:`Rfc2217Client._take`,
-before the bytes reach the board) and is told the settings through a :class:`VirtualPort`,
-which keeps them, logs each change (one line in the traffic log: ``line 19200 8N1``, ``DTR
-off``, ``break on``) and, with ``pacing`` on, paces the board's output at the line the client set
+The telnet side is pyserial's own server code (``serial.rfc2217.PortManager``, as
+:class:`omsd.transport.access_server.AccessServer` mends it): it answers the negotiation, takes
+the telnet commands out of what the client sends (:meth:`Rfc2217Client._take`, before the bytes
+reach the board) and is told the settings through a :class:`VirtualPort`, which keeps them, logs
+each change (one line in the traffic log: ``line 19200 8N1``, ``DTR off``, ``break on``) and,
+with ``pacing`` on, paces the board's output at the line the client set
 (:class:`omsd.pacing.Pacer`). The modem lines it reports are those of a card that is there and
 ready: CTS, DSR and CD on, RI off. The board's bytes are escaped on the way out (an IAC, 0xFF,
-doubled), so any byte passes both ways.
+doubled), so any byte passes both ways. While the client has suspended the flow
+(FLOWCONTROL-SUSPEND) what goes to it is held until it resumes.
 
 Otherwise it is a TCP endpoint (:class:`omsd.transport.tcp.TcpClient`): one client at a time,
 shared with the board's plain TCP endpoints (``second_client``), each connection a session of
@@ -29,13 +31,10 @@ from omsd.hostport import host_port
 from omsd.pacing import Line, Pacer
 from omsd.service import BoardService
 from omsd.transport import bound_address
-from omsd.transport.tcp import READ_SIZE, TcpClient
+from omsd.transport.tcp import MAX_PENDING_OUTPUT, READ_SIZE, TcpClient
 
 IAC = b"\xff"
-
-MAX_SUBOPTION = 1024
-"""Bytes of one subnegotiation (IAC SB ... IAC SE) kept, at most: RFC 2217's are a few bytes
-(a baud rate is four), and PortManager kept all a client sent until IAC SE, were it gigabytes."""
+_M_NORMAL = 0  # serial.rfc2217.M_NORMAL: the filter between telnet commands
 
 # The buffer every RFC 2217 connection reads into (see omsd.transport.tcp's, same reasoning: the
 # loop calls get_buffer and buffer_updated back to back on its one thread).
@@ -188,15 +187,14 @@ class VirtualPort:
 
 
 class _Raw:
-    """The connection PortManager writes its telnet answers to: the socket, unescaped."""
+    """The connection PortManager writes its telnet answers to: the socket, unescaped (held,
+    as the data is, while the client has suspended the flow)."""
 
     def __init__(self, client: Rfc2217Client) -> None:
         self._client = client
 
     def write(self, data: bytes) -> None:
-        transport = self._client.transport
-        if transport is not None and not transport.is_closing():
-            transport.write(data)
+        self._client.wire(data)
 
 
 class _Logger:
@@ -234,9 +232,10 @@ class Rfc2217Client(TcpClient):
     ) -> None:
         super().__init__(service, endpoint, policy)
         self.port = VirtualPort(self)
-        self.manager: Any = None  # serial.rfc2217.PortManager, once connected
+        self.manager: Any = None  # an AccessServer (a PortManager), once connected
         self.negotiated = False
-        self._normal: Any = None
+        self._held: bytearray | None = None  # the wire's bytes while the client suspends
+        self._held_dropping = False
         self.pacer: Pacer | None = None
         self._pacing = pacing
 
@@ -244,13 +243,14 @@ class Rfc2217Client(TcpClient):
         super().connection_made(transport)
         if self.transport is None:  # refused, or the cable is cut
             return
-        from serial import rfc2217  # type: ignore[import-untyped]
+        from omsd.transport.access_server import AccessServer
 
         if self._pacing:
             self.pacer = Pacer(asyncio.get_running_loop(), self.port.line.chars_per_second)
-        # PortManager sends its option requests at once
-        self._normal = rfc2217.M_NORMAL  # its filter's state between telnet commands
-        self.manager = rfc2217.PortManager(self.port, _Raw(self), _Logger(self))
+        # it sends its option requests at once
+        service = self.service
+        signature = f"omsd {service.name} {service.model.name}"
+        self.manager = AccessServer(self.port, _Raw(self), _Logger(self), signature, self.suspend)
 
     def line_changed(self, line: Line) -> None:
         if self.pacer is not None:
@@ -273,22 +273,10 @@ class Rfc2217Client(TcpClient):
         super()._take(data)
 
     def _filter(self, manager: Any, data: bytes) -> bytes:
-        normal = self._normal
-        if IAC not in data and manager.mode == normal and manager.suboption is None:
-            return data  # no telnet in it: the bytes are the data (what filter would yield)
-        try:
-            data = b"".join(manager.filter(data))
-        except (KeyError, IndexError, ValueError) as exc:  # a setting PortManager cannot map
-            self.service.log.warning(
-                f"{self.service.name}: {self.label}: RFC 2217: ignored a bad request ({exc!r})"
-            )
-            manager.mode = normal
-            manager.suboption = None
-            return b""
-        suboption = manager.suboption
-        if suboption is not None and len(suboption) > MAX_SUBOPTION:
-            del suboption[MAX_SUBOPTION:]  # the rest, up to IAC SE, is dropped
-        return data
+        if IAC not in data and manager.mode == _M_NORMAL and manager.suboption is None:
+            return data  # no telnet in it: the bytes are the data (what filter would give)
+        filtered: bytes = manager.filter(data)
+        return filtered
 
     # -- out: escaped, and paced --------------------------------------------------------------
 
@@ -299,7 +287,39 @@ class Rfc2217Client(TcpClient):
             self._write(data)
 
     def _write(self, data: bytes) -> None:
-        super()._write(data.replace(IAC, IAC + IAC))
+        data = data.replace(IAC, IAC + IAC)
+        if self._held is not None:
+            self.wire(data)
+        else:
+            super()._write(data)
+
+    def wire(self, data: bytes) -> None:
+        """Bytes for the socket as they are (telnet, or data escaped), held while the client
+        has suspended the flow: RFC 2217's FLOWCONTROL-SUSPEND asks the receiver to "suspend
+        transmission of both data and commands until the FLOWCONTROL-RESUME"."""
+        held = self._held
+        if held is None:
+            transport = self.transport
+            if transport is not None and not transport.is_closing():
+                transport.write(data)
+        elif len(held) + len(data) <= MAX_PENDING_OUTPUT:
+            held += data
+        elif not self._held_dropping:
+            self._held_dropping = True
+            self.service.log.warning(
+                f"{self.service.name}: {self.label} has suspended the flow too long; "
+                "dropping output"
+            )
+
+    def suspend(self, suspended: bool) -> None:
+        """FLOWCONTROL-SUSPEND (True) or FLOWCONTROL-RESUME (False) from the client."""
+        held = self._held
+        if suspended and held is None:
+            self._held = bytearray()
+        elif not suspended and held is not None:
+            self._held = None
+            self._held_dropping = False
+            self.wire(bytes(held))
 
     # -- purges, and the end ------------------------------------------------------------------
 
@@ -315,6 +335,7 @@ class Rfc2217Client(TcpClient):
     def connection_lost(self, exc: Exception | None) -> None:
         if self.pacer is not None:
             self.pacer.clear()
+        self._held = None
         super().connection_lost(exc)
 
 

@@ -6,6 +6,7 @@ wire). With pacing, the line the client set paces the board's output."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import socket
 import time
 from collections.abc import Callable
@@ -154,37 +155,36 @@ async def test_a_subnegotiation_that_never_ends_is_held_to_a_bound() -> None:
     and the board answers what follows it."""
     service, _, recorder = make_service()
     server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
-    longest = 0
 
-    def watch() -> bool:
-        nonlocal longest
-        for client in service.clients:
-            suboption = getattr(getattr(client, "manager", None), "suboption", None)
-            if suboption is not None:
-                longest = max(longest, len(suboption))
-        return False
+    def kept() -> int:
+        managers = [getattr(client, "manager", None) for client in service.clients]
+        return max(len(getattr(m, "suboption", None) or b"") for m in managers)
 
-    def raw() -> bytes:
-        with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+
+        def send() -> None:
             sock.sendall(b"\xff\xfa\x2c\x01")  # IAC SB COM-PORT SET-BAUDRATE ...
             for _ in range(64):
                 sock.sendall(b"A" * 65536)
+
+        def finish() -> bytes:
             sock.sendall(b"\xff\xf0WY")  # IAC SE
             got = b""
             while not got.endswith(b"PC48 ver 3.00-4\n"):
                 got += sock.recv(4096)
             return got
 
-    watching = asyncio.ensure_future(until(watch, timeout=30))
-    try:
-        got = await in_thread(raw)
-        assert got.endswith(b"PC48 ver 3.00-4\n")
-        assert recorder.received() == b"WY"
-        assert 0 < longest <= 2 * 65536, longest  # not the 4 MiB sent
-    finally:
-        watching.cancel()
-        server.close()
-        service.close()
+        try:
+            await in_thread(send)
+            await until(lambda: kept() > 0)
+            await asyncio.sleep(0.2)  # the rest of the 4 MiB read
+            assert 0 < kept() <= 2 * 65536, kept()  # not the 4 MiB sent
+            got = await in_thread(finish)
+            assert got.endswith(b"PC48 ver 3.00-4\n")
+            assert recorder.received() == b"WY"
+        finally:
+            server.close()
+            service.close()
 
 
 async def test_plain_tcp_stays_byte_transparent() -> None:
@@ -305,3 +305,137 @@ def test_escaping_matches_pyserial_s() -> None:
     data = bytes(range(256)) * 2
     escaped = b"".join(PortManager.escape(None, data))
     assert escaped == data.replace(b"\xff", b"\xff\xff")
+
+
+# -- a raw telnet client: what the RFC asks of the access server ------------------------------
+
+IAC_SB_COM = b"\xff\xfa\x2c"  # IAC SB COM-PORT-OPTION
+IAC_SE = b"\xff\xf0"
+NEGOTIATION = b"\xff\xfb\x01\xff\xfb\x03\xff\xfd\x00\xff\xfb\x2c"  # what the server asks first
+WY = b"PC48 ver 3.00-4\n"
+
+
+def exchange(port: int, *sends: bytes, wait: float = 0.3) -> tuple[bytes, bool]:
+    """Send each of ``sends`` (``wait`` seconds apart, then ``wait`` more) on a raw socket that
+    negotiates nothing; return what came back and whether the server closed the connection."""
+    with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+        sock.settimeout(0.05)
+        got = b""
+        closed = False
+        for data in (*sends, b""):
+            if data:
+                sock.sendall(data)
+            deadline = time.monotonic() + wait
+            while time.monotonic() < deadline and not closed:
+                try:
+                    chunk = sock.recv(4096)
+                except TimeoutError:
+                    continue
+                closed = not chunk
+                got += chunk
+        return got.removeprefix(NEGOTIATION), closed
+
+
+@pytest.mark.parametrize(
+    ("request_", "answer"),
+    [
+        (b"\xff\xf0", b""),  # IAC SE with no IAC SB before it
+        (IAC_SB_COM + b"\x01\x00\x25" + IAC_SE, IAC_SB_COM + b"\x65\x00\x00\x25\x80" + IAC_SE),
+        (IAC_SB_COM + b"\x03\x09" + IAC_SE, IAC_SB_COM + b"\x67\x01" + IAC_SE),  # parity 9
+        (IAC_SB_COM + b"\x04\x04" + IAC_SE, IAC_SB_COM + b"\x68\x01" + IAC_SE),  # stop size 4
+        (IAC_SB_COM + b"\x02" + IAC_SE, IAC_SB_COM + b"\x66\x08" + IAC_SE),  # no data size
+        (IAC_SB_COM + b"\x0a" + IAC_SE, b""),  # SET-LINESTATE-MASK without its mask
+        (IAC_SB_COM + b"\x0b" + IAC_SE, b""),  # SET-MODEMSTATE-MASK without its mask
+        (IAC_SB_COM + b"\x05" + IAC_SE, b""),  # SET-CONTROL without its value
+    ],
+)
+async def test_a_malformed_request_keeps_the_connection_and_the_commands_around_it(
+    request_: bytes, answer: bytes
+) -> None:
+    """RFC 2217: SET-BAUD's "value is four octets", SET-PARITY's values are 0 to 5, SET-STOPSIZE's
+    0 to 3. pyserial's PortManager raised on a short baud rate (struct.error), on an IAC SE with
+    no IAC SB (TypeError) and on a mask left out (TypeError): asyncio closed the connection, and
+    the WY before it in the same read was lost with it; an unknown parity or stop size (KeyError)
+    dropped the whole read, the commands before and after it too, and got no answer. Now the
+    request is ignored (a setting: answered with the port's current one, 9600 8N1), the
+    connection stays, and both WY are answered."""
+    service, log, recorder = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    try:
+        got, closed = await in_thread(lambda: exchange(port, b"WY" + request_ + b"WY"))
+        assert not closed
+        assert got.count(WY) == 2 and got.replace(WY, b"") == answer  # in either order
+        assert recorder.received() == b"WYWY"
+        assert "RFC 2217: ignored" in log.getvalue()
+        assert "Fatal error" not in log.getvalue()
+    finally:
+        server.close()
+        service.close()
+
+
+@pytest.mark.parametrize(
+    ("request_", "answer"),
+    [
+        (b"\x05\x04", b"\x69\x06"),  # Request BREAK State: off
+        (b"\x05\x07", b"\x69\x08"),  # Request DTR Signal State: on
+        (b"\x05\x0a", b"\x69\x0b"),  # Request RTS Signal State: on
+        (b"\x05\x0d", b"\x69\x0e"),  # Request Com Port Flow Control Setting (inbound): none
+        (b"\x05\x11", b"\x69\x01"),  # Use DCD Flow Control: not done, the setting stays none
+        (b"\x0a\x10", b"\x6e\x10"),  # SET-LINESTATE-MASK, echoed
+        (b"\x0b\xff\xff", b"\x6f\xff\xff"),  # SET-MODEMSTATE-MASK 0xFF, IAC doubled both ways
+        (b"\x00", b"\x64omsd board1 PC48-4E"),  # SIGNATURE without text: a request for ours
+    ],
+)
+async def test_queries_are_answered_as_the_rfc_says(request_: bytes, answer: bytes) -> None:
+    """RFC 2217, SET-CONTROL: "The command can also be sent to query the current option value"
+    (4 Request BREAK State, 7 Request DTR Signal State, 10 Request RTS Signal State, 13 Request
+    Com Port Flow Control Setting (inbound)); SIGNATURE: "If the command is sent without <text>
+    it is a request from the sender to receive the signature text of the receiver". The access
+    server answers with the command's code plus 100. pyserial's PortManager logged "not
+    implemented" and answered nothing, so a client waiting for the answer waited for ever."""
+    service, _, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    try:
+        got, closed = await in_thread(lambda: exchange(port, IAC_SB_COM + request_ + IAC_SE))
+        assert not closed
+        assert got == IAC_SB_COM + answer + IAC_SE
+    finally:
+        server.close()
+        service.close()
+
+
+async def test_flowcontrol_suspend_holds_the_board_s_output_until_resume() -> None:
+    """RFC 2217, FLOWCONTROL-SUSPEND: "The sender of this command is requesting that the receiver
+    suspend transmission of both data and commands until the FLOWCONTROL-RESUME is transmitted
+    by the sender." pyserial's PortManager noted it and nothing held the board's output back:
+    the reply to WY came while suspended. Now it is held (nothing lost) and sent on resume."""
+    service, _, recorder = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    suspend = IAC_SB_COM + b"\x08" + IAC_SE
+    resume = IAC_SB_COM + b"\x09" + IAC_SE
+    baud = IAC_SB_COM + b"\x01\x00\x00\x00\x00" + IAC_SE  # a query: its answer is held too
+
+    def session() -> tuple[bytes, bytes]:
+        with socket.create_connection(("127.0.0.1", port), timeout=5) as sock:
+            sock.sendall(suspend + b"WY" + baud)
+            time.sleep(0.5)
+            sock.settimeout(0.05)
+            before = b""
+            with contextlib.suppress(TimeoutError):
+                while True:
+                    before += sock.recv(4096)
+            sock.settimeout(5)
+            sock.sendall(resume)
+            after = b""
+            while WY not in after or IAC_SE not in after:
+                after += sock.recv(4096)
+            return before, after
+
+    try:
+        before, after = await in_thread(session)
+        assert before == NEGOTIATION  # nothing after the suspend
+        assert after.replace(WY, b"") == IAC_SB_COM + b"\x65\x00\x00\x25\x80" + IAC_SE
+        assert recorder.received() == b"WY"
+    finally:
+        server.close()
+        service.close()
