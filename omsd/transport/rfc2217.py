@@ -27,6 +27,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any
 
+from omsd.defaults import BAUD_MAX, BAUD_MIN
 from omsd.hostport import host_port
 from omsd.pacing import Line, Pacer
 from omsd.service import BoardService
@@ -84,8 +85,10 @@ class VirtualPort:
 
     @baudrate.setter
     def baudrate(self, value: int) -> None:
-        if not isinstance(value, int) or value <= 0:
-            raise ValueError(f"not a baud rate: {value!r}")
+        # what a serial endpoint takes (a device server's UART): PortManager answers a rate
+        # refused with the one the port keeps
+        if not isinstance(value, int) or not BAUD_MIN <= value <= BAUD_MAX:
+            raise ValueError(f"not a baud rate {BAUD_MIN}..{BAUD_MAX}: {value!r}")
         self._set_line(Line(value, self._line.bytesize, self._line.parity, self._line.stopbits))
 
     @property

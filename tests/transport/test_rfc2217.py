@@ -439,3 +439,23 @@ async def test_flowcontrol_suspend_holds_the_board_s_output_until_resume() -> No
     finally:
         server.close()
         service.close()
+
+
+@pytest.mark.parametrize("baud", [1, 49, 10_000_001, 0xFFFFFFFF])
+async def test_a_baud_rate_no_line_runs_at_is_refused_with_the_current_one(baud: int) -> None:
+    """RFC 2217, SET-BAUD: "the value is the baud rate being requested"; the access server answers
+    with the rate the port has. The OMS manuals know no serial line (no "baud" in any of them);
+    a serial endpoint takes 50 to 10000000 baud (BAUD_MIN, BAUD_MAX), what a UART of a device
+    server runs at. Any positive rate was taken, so 1 baud with pacing on gave the board's output
+    ten seconds a character; now the port keeps 9600 and says so (101 00 00 25 80)."""
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    request = IAC_SB_COM + b"\x01" + baud.to_bytes(4, "big").replace(b"\xff", b"\xff\xff")
+    try:
+        got, closed = await in_thread(lambda: exchange(port, request + IAC_SE + b"WY"))
+        assert not closed
+        assert got.replace(WY, b"") == IAC_SB_COM + b"\x65\x00\x00\x25\x80" + IAC_SE
+        assert "line " not in log.getvalue()  # no change of the line
+    finally:
+        server.close()
+        service.close()
