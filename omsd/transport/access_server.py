@@ -16,7 +16,8 @@ command's code plus 100. What :class:`AccessServer` changes of pyserial 3.5's ``
   Request DTR Signal State, Request RTS Signal State and Request Com Port Flow Control Setting
   (inbound); SIGNATURE without text (a request for ours). The inbound, DCD, DTR and DSR flow
   controls it ignored are refused by answering the setting the port keeps. SET-LINESTATE-MASK
-  and SET-MODEMSTATE-MASK are answered with the mask taken (110, 111).
+  and SET-MODEMSTATE-MASK are answered with the mask taken (110, 111). XON/XOFF and hardware
+  flow control are two values of one setting: one set turns the other off.
 - FLOWCONTROL-SUSPEND and FLOWCONTROL-RESUME from the client are passed to ``flow`` (the
   connection holds what it sends meanwhile, data and commands, as the RFC asks).
 - A telnet NOP (a keep-alive) is taken quietly.
@@ -182,6 +183,13 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
         elif command == SET_CONTROL and value[0] in (_DCD_FLOW, _DSR_FLOW):
             self._ignored(f"flow control {value[0]}: the port's stays")
             self._answer(SET_CONTROL, bytes([self._outbound()]))
+        elif command == SET_CONTROL and value[0] in (_FLOW_XONXOFF, _FLOW_HARDWARE):
+            # one setting of three values: the other one goes off (PortManager left it on)
+            if value[0] == _FLOW_XONXOFF:
+                port.rtscts = False
+            else:
+                port.xonxoff = False
+            super()._telnet_process_subnegotiation(suboption)
         elif command in (FLOWCONTROL_SUSPEND, FLOWCONTROL_RESUME):
             self._flow(command == FLOWCONTROL_SUSPEND)
         elif command == SET_LINESTATE_MASK:

@@ -459,3 +459,23 @@ async def test_a_baud_rate_no_line_runs_at_is_refused_with_the_current_one(baud:
     finally:
         server.close()
         service.close()
+
+
+async def test_the_flow_control_set_last_is_the_one_the_port_has() -> None:
+    """RFC 2217, SET-CONTROL: 1 Use No Flow Control, 2 Use XON/XOFF Flow Control, 3 Use HARDWARE
+    Flow Control (outbound/both): three values of one setting, and value 0 asks which it is.
+    pyserial's PortManager set XON/XOFF on for 2 and RTS/CTS on for 3 without turning the other
+    off: after 2 then 3 the port had both, logged both on, and answered the query with 2."""
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    control = [IAC_SB_COM + b"\x05" + bytes([value]) + IAC_SE for value in (2, 3, 0)]
+    try:
+        got, _ = await in_thread(lambda: exchange(port, b"".join(control)))
+        answers = [IAC_SB_COM + b"\x69" + bytes([value]) + IAC_SE for value in (2, 3, 3)]
+        assert got == b"".join(answers)
+        text = log.getvalue()
+        assert "XON/XOFF flow control on" in text and "RTS/CTS flow control on" in text
+        assert "XON/XOFF flow control off" in text
+    finally:
+        server.close()
+        service.close()
