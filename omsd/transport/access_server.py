@@ -20,7 +20,9 @@ command's code plus 100. What :class:`AccessServer` changes of pyserial 3.5's ``
   flow control are two values of one setting: one set turns the other off.
 - FLOWCONTROL-SUSPEND and FLOWCONTROL-RESUME from the client are passed to ``flow`` (the
   connection holds what it sends meanwhile, data and commands, as the RFC asks).
-- A telnet NOP (a keep-alive) is taken quietly.
+- A WILL or DO it does not expect is refused (DONT, WONT), quietly: PortManager left a client's
+  WILL ECHO unanswered and gave a warning for each option it did not know. A telnet NOP (a
+  keep-alive) is taken quietly.
 """
 
 from __future__ import annotations
@@ -147,6 +149,24 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
     def _ignored(self, what: str) -> None:
         if self.logger:
             self.logger.warning(f"ignored {what}")
+
+    # -- negotiation: an offer is always answered ---------------------------------------------
+
+    def _telnet_negotiate_option(self, command: bytes, option: bytes) -> None:
+        """A WILL, WONT, DO or DONT from the client. PortManager's options each answer the
+        commands they expect; a WILL or DO none expects (the client's WILL ECHO: ECHO is ours
+        only; an option PortManager does not know, such as a telnet client's terminal type or
+        window size) is refused with DONT or WONT, without a warning: RFC 854 has every offer
+        answered, and a telnet client makes several on every connection."""
+        expected = any(
+            item.option == option and command in (item.ack_yes, item.ack_no)
+            for item in self._telnet_options
+        )
+        if expected:
+            super()._telnet_negotiate_option(command, option)
+        elif command in (rfc2217.WILL, rfc2217.DO):
+            refusal = rfc2217.DONT if command == rfc2217.WILL else rfc2217.WONT
+            self.telnet_send_option(refusal, option)
 
     # -- the subnegotiations PortManager gets wrong or leaves out -----------------------------
 

@@ -479,3 +479,32 @@ async def test_the_flow_control_set_last_is_the_one_the_port_has() -> None:
     finally:
         server.close()
         service.close()
+
+
+@pytest.mark.parametrize(
+    ("offer", "refusal"),
+    [
+        (b"\xff\xfb\x01", b"\xff\xfe\x01"),  # WILL ECHO: DONT ECHO
+        (b"\xff\xfd\x01\xff\xfb\x01", b"\xff\xfe\x01"),  # DO ECHO accepts (no answer)
+        (b"\xff\xfb\x18", b"\xff\xfe\x18"),  # WILL TERMINAL-TYPE (unknown): DONT
+        (b"\xff\xfd\x1f", b"\xff\xfc\x1f"),  # DO NAWS (unknown): WONT
+    ],
+)
+async def test_an_option_offered_that_is_not_wanted_is_refused(
+    offer: bytes, refusal: bytes
+) -> None:
+    """RFC 854 (and RFC 1143): a WILL or a DO is answered, DO or WILL to accept, DONT or WONT to
+    refuse; a telnet client that offers an option waits for the answer. The access server asks
+    WILL ECHO (it echoes, the client need not); pyserial's PortManager knew ECHO only as its
+    own, so a client's WILL ECHO (the client would echo) got no answer at all. Unknown options
+    were refused already, each with a warning: a telnet client offers half a dozen (terminal
+    type, window size, speed...) on every connection, which is not something wrong."""
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    try:
+        got, _ = await in_thread(lambda: exchange(port, offer))
+        assert got == refusal
+        assert "warning" not in log.getvalue()
+    finally:
+        server.close()
+        service.close()
