@@ -23,6 +23,7 @@ command's code plus 100. What :class:`AccessServer` changes of pyserial 3.5's ``
 - A WILL or DO it does not expect is refused (DONT, WONT), quietly: PortManager left a client's
   WILL ECHO unanswered and gave a warning for each option it did not know. A telnet NOP (a
   keep-alive) is taken quietly.
+- A client that refuses binary (IAC WONT BINARY) speaks the NVT: its CR NUL is a CR (RFC 854).
 """
 
 from __future__ import annotations
@@ -89,13 +90,18 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
     ) -> None:
         self._signature = signature.encode("ascii", "replace")
         self._flow = flow
+        self._nvt = False  # the client refused binary: its CR NUL is a CR
+        self._after_cr = False  # an NVT client's last data byte was a CR
         super().__init__(port, connection, logger)
+        self._they_binary = next(o for o in self._telnet_options if o.name == "they-BINARY")
 
     # -- in: the telnet out of the data -------------------------------------------------------
 
     def filter(self, data: bytes) -> bytes:
         """The data in what the client sent, its telnet commands handled (PortManager's filter,
         all of a read at once, a run of data at a time)."""
+        if self.mode == _M_NORMAL and self.suboption is None and IAC not in data and not self._nvt:
+            return data  # no telnet in it: the bytes are the data
         out = bytearray()
         at, size = 0, len(data)
         while at < size:
@@ -131,6 +137,12 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
                 self.mode = _M_NEGOTIATE
             elif byte != rfc2217.NOP:  # a keep-alive, nothing to say
                 self._safely(self._telnet_process_command, byte)
+        if self._nvt and out:
+            # RFC 854: "CR NUL" where a carriage return alone is meant
+            if self._after_cr and out[0] == 0:
+                del out[0]
+            out = out.replace(b"\r\x00", b"\r")
+            self._after_cr = out.endswith(b"\r")
         return bytes(out)
 
     def _data(self, out: bytearray, data: bytes) -> None:
@@ -164,6 +176,7 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
         )
         if expected:
             super()._telnet_negotiate_option(command, option)
+            self._nvt = self._they_binary.state is rfc2217.INACTIVE  # refused, or ended
         elif command in (rfc2217.WILL, rfc2217.DO):
             refusal = rfc2217.DONT if command == rfc2217.WILL else rfc2217.WONT
             self.telnet_send_option(refusal, option)

@@ -35,7 +35,6 @@ from omsd.transport import bound_address
 from omsd.transport.tcp import MAX_PENDING_OUTPUT, READ_SIZE, TcpClient
 
 IAC = b"\xff"
-_M_NORMAL = 0  # serial.rfc2217.M_NORMAL: the filter between telnet commands
 
 # The buffer every RFC 2217 connection reads into (see omsd.transport.tcp's, same reasoning: the
 # loop calls get_buffer and buffer_updated back to back on its one thread).
@@ -276,9 +275,7 @@ class Rfc2217Client(TcpClient):
         super()._take(data)
 
     def _filter(self, manager: Any, data: bytes) -> bytes:
-        if IAC not in data and manager.mode == _M_NORMAL and manager.suboption is None:
-            return data  # no telnet in it: the bytes are the data (what filter would give)
-        filtered: bytes = manager.filter(data)
+        filtered: bytes = manager.filter(data)  # as it came when there is no telnet in it
         return filtered
 
     # -- out: escaped, and paced --------------------------------------------------------------

@@ -508,3 +508,30 @@ async def test_an_option_offered_that_is_not_wanted_is_refused(
     finally:
         server.close()
         service.close()
+
+
+@pytest.mark.parametrize(
+    ("binary", "received"),
+    [
+        (b"\xff\xfc\x00", b"WY\rRP\r\x00\r"),  # WONT BINARY: NVT, CR NUL is a CR
+        (b"\xff\xfb\x00", b"WY\r\x00RP\r\x00\x00\r\x00"),  # WILL BINARY: every byte is data
+        (b"", b"WY\r\x00RP\r\x00\x00\r\x00"),  # nothing negotiated: as it was, every byte
+    ],
+)
+async def test_a_client_that_refuses_binary_has_its_cr_nul_taken_as_cr(
+    binary: bytes, received: bytes
+) -> None:
+    """RFC 854, the NVT: "the sequence "CR NUL" must be used where a carriage return alone is
+    actually desired". The access server asks the client for binary (IAC DO BINARY); a client
+    that refuses (IAC WONT BINARY) sends its line ends as CR NUL, and the NUL reached the board
+    as a character ("command error: Invalid character: <00>", its error marker in the reply).
+    Now, for such a client, CR NUL is CR, also when the two come in two reads; a client in
+    binary, or one that negotiates nothing, has every byte passed as before."""
+    service, _, recorder = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    try:
+        await in_thread(lambda: exchange(port, binary + b"WY\r\x00RP\r", b"\x00\x00\r\x00"))
+        assert recorder.received() == received
+    finally:
+        server.close()
+        service.close()
