@@ -67,8 +67,16 @@ _REQUEST_RTS, _RTS_ON, _RTS_OFF = 10, 11, 12
 _REQUEST_INBOUND, _INBOUND_NONE, _INBOUND_XONXOFF, _INBOUND_HARDWARE = 13, 14, 15, 16
 _DCD_FLOW, _DTR_FLOW, _DSR_FLOW = 17, 18, 19
 
-_LENGTHS = {SET_BAUDRATE: 4, SET_DATASIZE: 1, SET_PARITY: 1, SET_STOPSIZE: 1, SET_CONTROL: 1}
-_LENGTHS.update({SET_LINESTATE_MASK: 1, SET_MODEMSTATE_MASK: 1})
+# the octets of value a command needs (SET-BAUD's "value is four octets", the others' one)
+_LENGTHS = {
+    SET_BAUDRATE: 4,
+    SET_DATASIZE: 1,
+    SET_PARITY: 1,
+    SET_STOPSIZE: 1,
+    SET_CONTROL: 1,
+    SET_LINESTATE_MASK: 1,
+    SET_MODEMSTATE_MASK: 1,
+}
 
 
 class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
@@ -193,9 +201,7 @@ class AccessServer(rfc2217.PortManager):  # type: ignore[misc]
             self._ignored(f"a short request (command {command}, {len(value)} bytes of value)")
             self._answer_setting(command)
         elif command == SIGNATURE:
-            if value:
-                self.logger.info(f"signature {value!r}")
-            else:
+            if not value:  # with text, it is the client's own: nothing to answer
                 self._answer(SIGNATURE, self._signature)
         elif command == SET_PARITY and value[0] not in (0, *rfc2217.RFC2217_REVERSE_PARITY_MAP):
             self._ignored(f"parity {value[0]}")
