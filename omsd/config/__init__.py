@@ -413,7 +413,7 @@ def with_web_option(config: DaemonConfig, web: str | None, control: bool) -> Dae
     ``ps`` shows), so ``--web`` beyond loopback needs that file."""
     if web is None and not control:
         return config
-    from omsd.config.syntax import AddressProblem, tcp_address
+    from omsd.config.syntax import TCP_SYNTAX, AddressProblem, tcp_address
 
     current = config.web
     if web is None:
@@ -422,11 +422,11 @@ def with_web_option(config: DaemonConfig, web: str | None, control: bool) -> Dae
         listen = current.listen
     else:
         try:
-            listen = tcp_address(int(web) if web.isdigit() else web)
+            listen = tcp_address(web)  # the text: a number is checked as --tcp's is
         except AddressProblem as exc:
             raise ConfigError("--web", None, f"expected {exc}, got {web!r}") from None
         except ValueError:
-            raise ConfigError("--web", None, f"expected [HOST:]PORT, got {web!r}") from None
+            raise ConfigError("--web", None, f"expected {TCP_SYNTAX}, got {web!r}") from None
     token = None if current is None else current.token
     if token is None and not is_loopback(listen.host):
         raise ConfigError(

@@ -67,6 +67,8 @@ def tcp_address(raw: int | str) -> TcpEndpoint:
     of this shape is a ``ValueError``; one of this shape that cannot be used an
     :class:`AddressProblem`."""
     if isinstance(raw, int):
+        if not 0 <= raw <= 65535:
+            raise ValueError(raw)
         return TcpEndpoint(DEFAULT_HOST, raw)
     m = _TCP.fullmatch(raw)
     if m is None or int(m.group("port")) > 65535:

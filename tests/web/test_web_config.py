@@ -115,3 +115,20 @@ def test_omsd_refuses_a_web_beyond_loopback_without_a_token() -> None:
     assert run.returncode == 2
     assert run.stderr.count("\n") == 1
     assert run.stderr.startswith("omsd: --web:") and "token" in run.stderr
+
+
+@pytest.mark.parametrize("web", ["99999", "65536", "127.0.0.1:99999"])
+def test_omsd_refuses_a_web_port_out_of_range_in_one_line(web: str) -> None:
+    """``--web 99999`` was taken as a port (a number goes through as one, unchecked) and the
+    daemon died with a traceback from ``bind()`` (``OverflowError: bind(): port must be
+    0-65535``, exit status 1); ``--tcp 99999`` has always been refused in one line. Now the
+    same line: ``omsd: --web: expected [HOST:]PORT with PORT 0..65535, got '99999'``."""
+    run = subprocess.run(
+        [sys.executable, "-m", "omsd", "--web", web, "--tcp", "0", "--control", "off"],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.count("\n") == 1, run.stderr
+    assert run.stderr.startswith("omsd: --web: expected [HOST:]PORT with PORT 0..65535")
