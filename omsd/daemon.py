@@ -19,6 +19,7 @@ import copy
 import gc
 import os
 import signal
+import socket
 import ssl
 import sys
 from collections.abc import Callable
@@ -52,6 +53,16 @@ def same_terminal(a: TextIO, b: TextIO) -> bool:
         return os.fstat(a.fileno()).st_rdev == os.fstat(b.fileno()).st_rdev
     except (OSError, ValueError, AttributeError):
         return False
+
+
+def listen_error(exc: OSError) -> str:
+    """Why a listening socket could not be made, in the system's words: asyncio's own message
+    wraps them ("error while attempting to bind on address ..."), and a host name that does
+    not resolve (``socket.gaierror``) carries a resolver's code where an errno would be, which
+    ``os.strerror`` does not know ("unknown error -2")."""
+    if isinstance(exc, socket.gaierror) or not exc.errno:
+        return str(exc.strerror or exc)
+    return os.strerror(exc.errno)
 
 
 class StartupError(Exception):
@@ -187,7 +198,7 @@ class Daemon:
                             service, tcp.host, tcp.port, board.second_client, tcp.terminal
                         )
                     except OSError as exc:
-                        reason = os.strerror(exc.errno) if exc.errno else str(exc)
+                        reason = listen_error(exc)
                         raise StartupError(
                             f"{board.name}: cannot listen on tcp {tcp}: {reason.lower()}"
                         ) from None
@@ -271,7 +282,7 @@ class Daemon:
                     service, rfc.host, rfc.port, board.second_client, rfc.pacing
                 )
             except OSError as exc:
-                reason = os.strerror(exc.errno) if exc.errno else str(exc)
+                reason = listen_error(exc)
                 raise StartupError(
                     f"{board.name}: cannot listen on rfc2217 {rfc}: {reason.lower()}"
                 ) from None
@@ -367,7 +378,7 @@ class Daemon:
             try:
                 host, port = await control.listen_tcp(config.tcp.host, config.tcp.port)
             except OSError as exc:
-                reason = os.strerror(exc.errno) if exc.errno else str(exc)
+                reason = listen_error(exc)
                 raise StartupError(
                     f"cannot listen on control tcp {config.tcp}: {reason.lower()}"
                 ) from None
@@ -407,7 +418,7 @@ class Daemon:
         try:
             host, port = await web.start()
         except OSError as exc:
-            reason = os.strerror(exc.errno) if exc.errno else str(exc)
+            reason = listen_error(exc)
             raise StartupError(
                 f"cannot serve the web dashboard on {config.listen}: {reason.lower()}"
             ) from None

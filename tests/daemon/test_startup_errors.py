@@ -221,3 +221,35 @@ def test_both_given_says_nothing_about_it(omsd: Omsd, tmp_path: Path) -> None:
     daemon = omsd("--tcp", "127.0.0.1:0", "--pty", str(tmp_path / "p"), "--view", "plain")
     assert daemon.stop() == 0
     assert "no pty" not in daemon.stderr and "no TCP" not in daemon.stderr
+
+
+NOWHERE = "no-such-host.invalid"  # RFC 2606: .invalid never resolves
+
+
+@pytest.mark.parametrize("where", ["tcp", "rfc2217", "control tcp"])
+def test_a_host_name_that_does_not_resolve(tmp_path: Path, _runtime: Path, where: str) -> None:
+    """A listening address whose host name does not resolve said ``unknown error -2``: the
+    resolver's error (``socket.gaierror``) carries an EAI_* code where an errno would be, and
+    ``os.strerror(-2)`` knows none. Now the resolver's own words, as ``getaddrinfo`` says them
+    (``name or service not known``)."""
+    try:
+        socket.getaddrinfo(NOWHERE, 0)
+    except socket.gaierror as exc:
+        reason = str(exc.strerror).lower()
+    else:  # pragma: no cover - a resolver that answers for .invalid
+        pytest.skip(f"{NOWHERE} resolves here")
+    port = free_port()
+    path = tmp_path / "omsd.toml"
+    board = f'[[board]]\nname = "b"\ntcp = "127.0.0.1:{port}"\n'
+    if where == "tcp":
+        path.write_text(f'[[board]]\nname = "b"\ntcp = "{NOWHERE}:{port}"\n')
+        expected = f"omsd: b: cannot listen on tcp {NOWHERE}:{port}: {reason}"
+    elif where == "rfc2217":
+        path.write_text(f'{board}rfc2217 = "{NOWHERE}:0"\n')
+        expected = f"omsd: b: cannot listen on rfc2217 {NOWHERE}:0: {reason}"
+    else:
+        path.write_text(f'[control]\ntcp = "{NOWHERE}:0"\n\n{board}')
+        expected = f"omsd: cannot listen on control tcp {NOWHERE}:0: {reason}"
+    line = failed(run_omsd("--config", str(path), "--control", "off", cwd=tmp_path))
+    assert line == expected
+    nothing_left(tmp_path, _runtime, port)
