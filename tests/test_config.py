@@ -8,6 +8,9 @@ import grp
 import json
 import os
 import re
+import resource
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -1002,3 +1005,28 @@ def test_the_default_encoder_index_is_in_the_middle_of_the_home_window(tmp_path:
     assert "encoder_index: expected an integer 0..499" in load_error(
         tmp_path, MINIMAL + "[board.axes.X]\nencoder_counts_per_rev = 500\nencoder_index = 500\n"
     )
+
+
+def test_a_file_without_end_is_refused_not_read_for_ever(tmp_path: Path) -> None:
+    """``omsd --config /dev/zero`` read until memory ran out (1.7 GB in 3 s, the machine's
+    whole memory soon after): the file was read whole before a byte of it was looked at. A
+    configuration is read up to ``MAX_CONFIG`` bytes; one longer is refused in one line. A
+    pipe (``--config <(...)``) is read as before."""
+    from omsd.config.reading import MAX_CONFIG
+
+    limit = lambda: resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))  # noqa: E731
+    command = [sys.executable, "-m", "omsd", "--config", "/dev/zero", "--control", "off"]
+    run = subprocess.run(
+        command, capture_output=True, text=True, timeout=60, preexec_fn=limit, cwd=tmp_path
+    )
+    assert run.returncode == 2, run.stderr[-500:]
+    assert run.stderr == (
+        f"omsd: /dev/zero: expected a configuration of at most {MAX_CONFIG} bytes, got more\n"
+    )
+    read, write = os.pipe()
+    with os.fdopen(write, "w") as out:
+        out.write(MINIMAL)
+    try:
+        assert load_config(f"/dev/fd/{read}").boards[0].model == "PC48-4E"
+    finally:
+        os.close(read)

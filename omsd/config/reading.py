@@ -17,6 +17,10 @@ from omsd.config.values import FilePath
 from omsd.config.wording import config_error
 from omsd.config_errors import ConfigError, show
 
+MAX_CONFIG = 4 * 1024 * 1024
+"""Bytes of a configuration file read at most (a file of a thousand boards is some 100 KB);
+one longer is refused. ``--config /dev/zero``, read whole, took the machine's memory."""
+
 
 def load(path: str | os.PathLike[str]) -> DaemonConfig:
     """Read and validate a TOML configuration file."""
@@ -33,9 +37,13 @@ def read(path: str | os.PathLike[str]) -> tuple[str, dict[str, Any]]:
     """A file's text and its TOML document, or the one-line error."""
     source = os.fspath(path)
     try:
-        data = Path(path).read_bytes()
+        with Path(path).open("rb") as file:  # a pipe too: --config <(...)
+            data = file.read(MAX_CONFIG + 1)
     except OSError as exc:
         raise ConfigError(source, None, f"cannot read the file: {exc.strerror or exc}") from None
+    if len(data) > MAX_CONFIG:
+        detail = f"expected a configuration of at most {MAX_CONFIG} bytes, got more"
+        raise ConfigError(source, None, detail)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
