@@ -70,6 +70,7 @@ before. Requests sent during a stream are answered too, their replies among its 
 from __future__ import annotations
 
 import json
+import math
 from typing import Any, Protocol
 
 MAX_LINE = 64 * 1024  # a request longer than this is refused (and the connection closed)
@@ -124,7 +125,7 @@ def encode(message: dict[str, Any]) -> bytes:
 
 def decode(line: bytes) -> dict[str, Any]:
     try:
-        message = json.loads(line, parse_constant=_not_json)
+        message = json.loads(line, parse_constant=_not_json, parse_float=_finite)
     except (ValueError, UnicodeDecodeError) as exc:
         raise ControlError(f"not a JSON object: {exc}") from None
     except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
@@ -138,6 +139,15 @@ def _not_json(name: str) -> Any:
     """Python's json reads NaN and Infinity, which JSON has not (and a reply echoing them in its
     id could not be written)."""
     raise ValueError(f"{name} is not JSON")
+
+
+def _finite(text: str) -> float:
+    """A JSON number as a float, one beyond a float's range (``1e999``) refused: read as
+    infinity, it could not be written back (a reply echoing it in its id was never sent)."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text} is beyond a float's range")
+    return value
 
 
 def merge(state: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:

@@ -855,6 +855,10 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
             (b'{"id":NaN,"op":"boards"}\n', None, "NaN"),
             (b'{"id":10,"op":"slip","axis":"X","steps":-Infinity}\n', None, "Infinity"),
             (b"[" * 30000 + b"\n", None, "nested too deeply"),
+            # a number beyond a float's range is read as infinity: no reply either, the client
+            # waited for ever ("ValueError: Out of range float values are not JSON compliant")
+            (b'{"id":1e999,"op":"boards"}\n', None, "1e999"),
+            (b'{"id":15,"op":"wait","until":"idle","timeout":-1e400}\n', None, "-1e400"),
             # JSON's true is no number: it drove input 1 and closed X's positive limit
             (b'{"id":11,"op":"input","bit":true,"high":false}\n', 11, "bit"),
             (
