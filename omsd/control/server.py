@@ -47,7 +47,8 @@ never read the answers had every line it sent made a task at once: 1.6 GB in 15 
 
 MAX_WAITS = 256
 """``wait`` operations in progress at once, of all the connections of one control server (the
-socket's; the dashboard and the MQTT bridge have one each, with a bound of their own); one more
+socket's and its TCP endpoint's together; the dashboard and the MQTT bridge have one each, with
+a bound of their own, so that neither can use up the socket's: docs/decisions.md); one more
 is refused. A board's waits are looked at together, once at every change of the board
 (:mod:`omsd.control.waits`); when each woke at every change on its own, 20,000 of them, sent in
 one go, took the daemon's whole CPU, every board stopped answering and SIGTERM went unheard."""

@@ -685,6 +685,50 @@ def test_waits_are_bounded_and_end_with_their_connection(bench: Callable[..., Be
         assert "timed out" in reply["error"], reply
 
 
+def _accepts(port: int) -> bool:
+    try:
+        socket.create_connection(("127.0.0.1", port), timeout=TIMEOUT).close()
+    except ConnectionRefusedError:
+        return False
+    return True
+
+
+def test_the_socket_and_its_tcp_endpoint_share_one_bound_on_waits(
+    omsd: Omsd, tmp_path: Path
+) -> None:
+    """``MAX_WAITS`` is the control server's, and the Unix socket and ``[control] tcp`` are one
+    server: waits sent to both count together, so a client cannot have twice as many by using
+    both. (The dashboard and the MQTT bridge each have a server and a bound of their own:
+    docs/decisions.md, "Control, faults and time".)"""
+    from omsd.control import server
+
+    limit = server.MAX_WAITS
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = int(probe.getsockname()[1])
+    path, config = tmp_path / "control.sock", tmp_path / "omsd.toml"
+    config.write_text(
+        f'[control]\ntcp = "127.0.0.1:{port}"\n\n[[board]]\nmodel = "PC48-4E"\ntcp = 0\n'
+    )
+    omsd("--config", str(config), "--control", str(path))
+    control(path).close()  # the socket listens; the TCP endpoint may be a moment behind
+    assert wait_for(lambda: _accepts(port)), "the control TCP endpoint does not listen"
+    request = b'{"id":%d,"op":"wait","until":"done","axis":"X","timeout":3600}\n'
+    with (
+        socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as unix,
+        socket.create_connection(("127.0.0.1", port), timeout=TIMEOUT) as tcp,
+    ):
+        unix.settimeout(TIMEOUT)
+        unix.connect(str(path))
+        unix.sendall(b"".join(request % i for i in range(limit)))
+        state = b'{"id":"s","op":"state"}\n'  # answered once the waits before it are in place
+        unix.sendall(state)
+        assert json.loads(unix.makefile("rb").readline())["id"] == "s"
+        tcp.sendall(request % limit)
+        refused = json.loads(tcp.makefile("rb").readline())
+        assert refused["ok"] is False and "too many waits" in refused["error"], refused
+
+
 def rss_kib(pid: int) -> int:
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
         if line.startswith("VmRSS:"):
