@@ -570,6 +570,7 @@ def _serve(args: argparse.Namespace) -> int:
 def _start_and_serve(args: argparse.Namespace) -> int:
     from omsd.config import (
         ConfigError,
+        check_option_path,
         from_options,
         load_config,
         with_control_option,
@@ -582,7 +583,10 @@ def _start_and_serve(args: argparse.Namespace) -> int:
     from omsd.telemetry.traffic import TrafficLog
 
     try:
-        if args.config:
+        for option, text in (("--config", args.config), ("--log", args.log)):
+            if text is not None:
+                check_option_path(option, text)
+        if args.config is not None:
             single = [
                 o
                 for o in ("board", "tcp", "pty", "serial", "rfc2217", "link", "eos", "terminal")
@@ -614,7 +618,7 @@ def _start_and_serve(args: argparse.Namespace) -> int:
     except LoopUnavailable as exc:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
-    log_file = args.log if args.log else config.log.file
+    log_file = args.log if args.log is not None else config.log.file
     view = args.view or config.log.view
     try:
         log = TrafficLog(view=view, file=log_file, group=config.log.group)

@@ -397,6 +397,12 @@ def _option_path(option: str, text: str) -> Path:
     return reading.option_path(option, text)
 
 
+def check_option_path(option: str, text: str) -> None:
+    """``--config``/``--log``'s text is a path: an empty or blank one (``--config "$FILE"``
+    with FILE unset) is the one-line error, not taken for the option left out."""
+    _option_path(option, text)
+
+
 def with_control_option(config: DaemonConfig, control: str | None) -> DaemonConfig:
     """``--control PATH`` (the control socket) or ``--control off``."""
     if control is None:
@@ -497,6 +503,7 @@ __all__ = [
     "SerialEndpoint",
     "TcpEndpoint",
     "WebConfig",
+    "check_option_path",
     "default_config",
     "default_pty_link",
     "from_options",

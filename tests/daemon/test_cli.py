@@ -186,3 +186,16 @@ def test_serving_is_read_as_the_whole_parser_reads_it(
         capsys.readouterr()
     if quick is not None:
         assert vars(quick) == vars(whole)
+
+
+@pytest.mark.parametrize("option", ["--config", "--log"])
+def test_an_empty_path_is_one_line_not_taken_for_none(tmp_path: Path, option: str) -> None:
+    """``--config ""`` (``--config "$FILE"`` with FILE unset) was taken for no --config at all:
+    the daemon served the default board on the default port instead of the file's boards;
+    ``--log ""`` served without the log asked for. Now each is refused as ``--state ""`` and
+    ``--control ""`` are: ``omsd: --config: expected a path, got ""``, status 2."""
+    result = run_omsd(
+        option, "", "--tcp", "127.0.0.1:0", "--control", "off", cwd=tmp_path, timeout=10
+    )
+    assert one_line(result) == f'omsd: {option}: expected a path, got ""'
+    assert result.returncode == 2
