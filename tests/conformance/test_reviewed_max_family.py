@@ -2,9 +2,10 @@
 
 The replies of the PCIx personality (with its MAX-family extension) are read here the way
 EPICS ``motorOmsAsyn`` reads them, on every PCIx model, at rest, in motion, at a limit, with servo
-loops closed and open. The parsers below are transcriptions of
-``epics-motor/motorOmsAsyn`` ``omsAsynApp/src/omsBaseController.cpp`` (the omsMAXnet client's
-base class) and ``omsAsynApp/src/omsMAXnet.cpp``:
+loops closed and open. The parsers (the poll's in ``max_client.py``, shared with
+``test_reviewed_max_sequences.py``) are transcriptions of ``epics-motor/motorOmsAsyn``
+``omsAsynApp/src/omsBaseController.cpp`` (the omsMAXnet client's base class) and
+``omsAsynApp/src/omsMAXnet.cpp``:
 
 * ``omsMAXnet::sendReceive`` reads up to the input EOS ``"\\n\\r"`` and cuts "a leading CR, NL,
   /006": ``while ((*outString == 6)||(*outString == 13)||(*outString == 10)) ++outString;``
@@ -34,76 +35,15 @@ too (the last test; ``docs/decisions.md``, "MAX-family extension").
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 
 import pytest
 
 from omsd.board.harness import Harness
 from omsd.engine.world import AxisWorld
 
+from .max_client import poll, receive
+
 PCIX_MODELS = ["PCIX-002", "PCIX-020", "PCIX-202", "PCIX-200", "PCIX-004", "PCIX-040", "PCIX-400"]
-
-
-def receive(h: Harness, line: str) -> str:
-    """omsMAXnet::sendReceive: one ``text\\n\\r`` read to the EOS, leading CR/LF/ACK cut."""
-    data = h.send(line + "\n")
-    assert data.endswith(b"\n\r") and data.count(b"\n\r") == 1, (line, data)
-    return data[:-2].decode("latin-1").lstrip("\x06\r\n")
-
-
-def axes_array(text: str, n: int) -> list[int]:
-    """getAxesArray: ``n`` comma-separated integers, each read by strtol."""
-    fields = text.split(",")
-    assert len(fields) == n, text
-    assert all(re.fullmatch(r"-?\d+", f) for f in fields), text
-    return [int(f) for f in fields]
-
-
-def axes_status(text: str, n: int) -> list[str]:
-    """getAxesStatus and the poller's fixed offsets (five characters per axis)."""
-    assert text[:1] in ("P", "M") and len(text) >= n * 5 - 1, text
-    fields = [text[i * 5 : i * 5 + 4] for i in range(n)]
-    assert all(re.fullmatch(r"[PM][DN][LN][HN]", f) for f in fields), text
-    return fields
-
-
-def limits(word: str, i: int, invert: bool) -> tuple[bool, bool]:
-    """The poller's QL decode for axis ``i``: (low limit, high limit)."""
-    m = re.match(r"\s*([0-9a-fA-F]+)", word)  # sscanf "%x"
-    assert m, word
-    flags = int(m[1], 16)
-    return bool(flags & (1 << i)) ^ invert, bool(flags & (1 << (i + 8))) ^ invert
-
-
-@dataclass
-class Poll:
-    """One round of omsBaseController::omsPoller, as it parses it."""
-
-    RI: list[str]
-    PP: list[int]
-    PE: list[int]
-    RV: list[int]
-    CL: list[str]
-    EA: list[str]
-    QL: str
-
-
-def poll(h: Harness) -> Poll:
-    n = len(h.board.model.axes)
-    out = Poll(
-        RI=axes_status(receive(h, "AM;RI;"), n),
-        PP=axes_array(receive(h, "AM PP;"), n),
-        PE=axes_array(receive(h, "AM PE;"), n),
-        RV=axes_array(receive(h, "AM;RV;"), n),
-        CL=receive(h, "AM;CL?;").split(","),
-        EA=receive(h, "AM;EA;").split(","),
-        QL=receive(h, "AM;QL;"),
-    )
-    assert receive(h, "#WS") == "=0"
-    assert len(out.CL) == n and set(out.CL) <= {"on", "off"}, out
-    assert len(out.EA) == n, out
-    assert h.errors() == []
-    return out
 
 
 @pytest.mark.parametrize("model", PCIX_MODELS)
@@ -124,7 +64,7 @@ def test_omsmaxnet_parsers_read_every_pcix_at_rest_in_motion_and_at_limits(model
 
     at_rest = poll(h)
     assert all(f == "PNNN" for f in at_rest.RI)
-    assert not any(any(limits(at_rest.QL, i, invert[i])) for i in range(n))
+    assert not any(any(at_rest.limits(i, invert[i])) for i in range(n))
 
     h.send("AX;AC2000;VL1000;VB0;MR-300;GO;ID;\n")
     h.advance(0.3)
@@ -141,8 +81,8 @@ def test_omsmaxnet_parsers_read_every_pcix_at_rest_in_motion_and_at_limits(model
     assert hit.RI[0] == "MNLN" and hit.PP[0] == -500
     assert hit.RI[1] == "PNLN" and hit.PP[1] == 2000
     assert hit.RV[:2] == [0, 0]
-    assert limits(hit.QL, 0, invert[0]) == (True, False)
-    assert limits(hit.QL, 1, invert[1]) == (False, True)
+    assert hit.limits(0, invert[0]) == (True, False)
+    assert hit.limits(1, invert[1]) == (False, True)
 
 
 @pytest.mark.parametrize("model", ["PCIX-400", "PCIX-202", "PCIX-200", "PCIX-040", "PCIX-020"])

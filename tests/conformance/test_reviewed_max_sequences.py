@@ -29,13 +29,12 @@ switches that far from the motor for good (``docs/decisions.md``, "The PCIx", "S
 
 from __future__ import annotations
 
-import re
-from dataclasses import dataclass
-
 import pytest
 
 from omsd.board.harness import Harness
 from omsd.engine.world import AxisWorld
+
+from .max_client import Poll, poll, receive
 
 # negative limit at -500, positive at 3000, home switch 1000..1100 (the default window)
 STAGE = AxisWorld(negative_limit=-500, positive_limit=3000)
@@ -51,46 +50,9 @@ def board(model: str, stage: AxisWorld = STAGE) -> Harness:
     return h
 
 
-def receive(h: Harness, line: str) -> str:
-    """omsMAXnet::sendReceive: one ``text\\n\\r``, nothing before it."""
-    data = h.send(line + "\n")
-    assert data.endswith(b"\n\r") and data.count(b"\n\r") == 1, (line, data)
-    assert data[:1] not in (b"\n", b"\r"), (line, data)
-    return data[:-2].decode("ascii")
-
-
-@dataclass
-class Poll:
-    RI: list[str]
-    PP: list[int]
-    PE: list[int]
-    RV: list[int]
-    EA: list[str]
-    CL: list[str]
-    QL: int
-
-
-def poll(h: Harness) -> Poll:
-    ri = receive(h, "AM;RI;")
-    assert ri[:1] in ("P", "M") and len(ri) >= 4 * 5 - 1, ri  # getAxesStatus
-    out = Poll(
-        RI=[ri[i * 5 : i * 5 + 4] for i in range(4)],
-        PP=[int(f) for f in receive(h, "AM PP;").split(",")],
-        PE=[int(f) for f in receive(h, "AM PE;").split(",")],
-        RV=[int(f) for f in receive(h, "AM;RV;").split(",")],
-        EA=receive(h, "AM;EA;").split(","),
-        CL=receive(h, "AM;CL?;").split(","),
-        QL=int(receive(h, "AM;QL;"), 16),
-    )
-    assert all(re.fullmatch(r"[PM][DN][LN][HN]", f) for f in out.RI), out
-    assert len(out.PP) == len(out.PE) == len(out.RV) == len(out.EA) == len(out.CL) == 4, out
-    assert h.errors() == []
-    return out
-
-
 def x_limits(p: Poll) -> tuple[bool, bool]:
     """QL as the client decodes it for X, which the init line made active high (LT? =h)."""
-    return bool(p.QL & 1), bool(p.QL & 1 << 8)
+    return p.limits(0)
 
 
 def polls_until_done(h: Harness, limit: float = 20.0) -> tuple[list[Poll], Poll]:
