@@ -325,7 +325,7 @@ class Daemon:
                 if problem is not None:
                     raise StartupError(f"{name}: cannot create pty link {link}: {problem}")
         try:
-            preflight(runtime, ptys, self.config.control.socket)
+            preflight(runtime, ptys, self.config.control.socket, self.config.state)
         except Refused as exc:
             raise StartupRefused(str(exc)) from None
         except OSError as exc:  # the runtime directory cannot be made, a path cannot be read

@@ -19,7 +19,8 @@ by :meth:`omsd.daemon.Daemon.start`), it refuses, with one line and exit status 
 * anything at a pty link's path that is not omsd's own kind of link, a symlink to a pty device
   (``/dev/pts/N``; ``/dev/ttysNNN`` on macOS and the BSDs) left by a daemon that died: a
   regular file, a directory, a socket, a symlink anywhere else (:func:`pty_link_refusal`);
-* anything at the control socket's path that is not a socket (:func:`socket_refusal`).
+* anything at the control socket's path that is not a socket (:func:`socket_refusal`);
+* a pty link, the control socket and the state file at one path (:func:`shared_path`).
 
 Nor does it start where it cannot work (:meth:`omsd.daemon.Daemon.start`, also exit status 2,
 issue 14): a pty link outside the runtime directory whose directory is missing
@@ -162,10 +163,20 @@ def socket_refusal(path: Path) -> str | None:
     )
 
 
-def preflight(runtime: Path, ptys: Iterable[tuple[str, Path]], control: Path | None) -> None:
+def preflight(
+    runtime: Path,
+    ptys: Iterable[tuple[str, Path]],
+    control: Path | None,
+    state: Path | None = None,
+) -> None:
     """The checks made before the daemon creates anything (:class:`Refused`): the runtime
     directory, if anything goes in it (then it is created), every pty link's path (``ptys``:
-    board name and link) and the control socket's."""
+    board name and link), the control socket's, and that no two of them and the state file
+    are one path (:func:`shared_path`)."""
+    ptys = list(ptys)
+    problem = shared_path(ptys, control, state)
+    if problem is not None:
+        raise Refused(problem)
     places = [link for _, link in ptys] + ([] if control is None else [control])
     if any(p.is_relative_to(runtime) for p in places):
         check_runtime_directory(runtime)
@@ -177,6 +188,26 @@ def preflight(runtime: Path, ptys: Iterable[tuple[str, Path]], control: Path | N
         problem = socket_refusal(control)
         if problem is not None:
             raise Refused(problem)
+
+
+def shared_path(
+    ptys: Iterable[tuple[str, Path]], control: Path | None, state: Path | None
+) -> str | None:
+    """Why two of the pty links, the control socket and the state file cannot be: they are
+    one path, and each would be made over the other (the flash saved over the socket, then
+    removed with it at the stop), or ``None``. Pty links among themselves are the
+    configuration's to refuse (two boards' endpoints)."""
+    same = "give each a path of its own"
+    where = {os.path.abspath(link): board for board, link in ptys}
+    if control is not None and (board := where.get(os.path.abspath(control))) is not None:
+        return f"{board}: pty link {control} is the control socket's path too: {same}"
+    if state is None:
+        return None
+    if control is not None and os.path.abspath(state) == os.path.abspath(control):
+        return f"state file {state} is the control socket's path too: {same}"
+    if (board := where.get(os.path.abspath(state))) is not None:
+        return f"state file {state} is {board}'s pty link too: {same}"
+    return None
 
 
 def missing_directory(directory: Path) -> str | None:
@@ -272,6 +303,7 @@ __all__ = [
     "open_log",
     "preflight",
     "pty_link_refusal",
+    "shared_path",
     "socket_refusal",
     "state_file_problem",
 ]

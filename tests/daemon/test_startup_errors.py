@@ -253,3 +253,37 @@ def test_a_host_name_that_does_not_resolve(tmp_path: Path, _runtime: Path, where
     line = failed(run_omsd("--config", str(path), "--control", "off", cwd=tmp_path))
     assert line == expected
     nothing_left(tmp_path, _runtime, port)
+
+
+@pytest.mark.parametrize(
+    ("options", "expected"),
+    [
+        (
+            ("--pty", "{same}", "--control", "{same}"),
+            "omsd: board1: pty link {same} is the control socket's path too:"
+            " give each a path of its own",
+        ),
+        (
+            ("--tcp", "127.0.0.1:{port}", "--state", "{same}", "--control", "{same}"),
+            "omsd: state file {same} is the control socket's path too:"
+            " give each a path of its own",
+        ),
+        (
+            ("--tcp", "127.0.0.1:{port}", "--pty", "{same}", "--state", "{same}"),
+            "omsd: state file {same} is board1's pty link too: give each a path of its own",
+        ),
+    ],
+)
+def test_one_path_for_two_things_is_refused(
+    tmp_path: Path, _runtime: Path, options: tuple[str, ...], expected: str
+) -> None:
+    """The pty link, the control socket and the state file at one path: each was made over the
+    other. ``--pty X --control X`` served a control socket that the pty link replaced at once
+    (``omsd ctl`` found a pty there); with ``--state X --control X`` the first save renamed
+    the flash over the socket and the daemon's stop removed it with the socket: the flash was
+    lost. Now refused before anything is made."""
+    same, port = tmp_path / "same", free_port()
+    args = [o.format(same=same, port=port) for o in options]
+    line = failed(run_omsd(*args, cwd=tmp_path, timeout=10))
+    assert line == expected.format(same=same)
+    assert not os.path.lexists(same)
