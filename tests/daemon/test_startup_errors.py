@@ -265,8 +265,7 @@ def test_a_host_name_that_does_not_resolve(tmp_path: Path, _runtime: Path, where
         ),
         (
             ("--tcp", "127.0.0.1:{port}", "--state", "{same}", "--control", "{same}"),
-            "omsd: state file {same} is the control socket's path too:"
-            " give each a path of its own",
+            "omsd: state file {same} is the control socket's path too: give each a path of its own",
         ),
         (
             ("--tcp", "127.0.0.1:{port}", "--pty", "{same}", "--state", "{same}"),
