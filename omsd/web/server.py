@@ -6,12 +6,12 @@ Off unless configured (``[web]``, ``--web``). It serves:
 * ``/``: the page (``static/index.html``); its script, styles and the vendored uPlot under
   ``/static/`` (package data: no CDN, no build step);
 * ``/ws``: a WebSocket on which the page is a control connection like ``omsd ctl``'s
-  (:mod:`omsd.control.protocol`): each text frame from the page is one request, each frame to
-  it one or more JSON lines (replies, and the ``subscribe`` stream of
-  :mod:`omsd.control.watch`, bounded as it is for the socket). The first frame says what the
-  page may do: ``{"kind": "hello", "control": false, "version": "0.1.0", "boards": [...]}``.
-  Without ``control = true`` only the ops of :data:`omsd.control.protocol.READ_ONLY_OPS` are
-  answered (the others get an error reply).
+  (:mod:`omsd.control.protocol`): each text frame from the page is one request (a binary frame
+  gets an error line, :data:`BINARY`), each frame to it one or more JSON lines (replies, and
+  the ``subscribe`` stream of :mod:`omsd.control.watch`, bounded as it is for the socket). The
+  first frame says what the page may do: ``{"kind": "hello", "control": false, "version":
+  "0.1.0", "boards": [...]}``. Without ``control = true`` only the ops of
+  :data:`omsd.control.protocol.READ_ONLY_OPS` are answered (the others get an error reply).
 
 Guards. The server listens on loopback unless another address is configured, and a token is
 then required (the configuration refuses one without). With a token, ``/`` and ``/ws`` answer
@@ -34,7 +34,7 @@ from urllib.parse import urlsplit
 from aiohttp import WSMsgType, web
 
 from omsd.config import WebConfig, is_loopback
-from omsd.control.protocol import MAX_LINE, READ_ONLY_OPS
+from omsd.control.protocol import MAX_LINE, READ_ONLY_OPS, encode
 from omsd.control.server import ControlServer
 from omsd.telemetry.traffic import TrafficLog
 from omsd.transport import bound_address
@@ -57,6 +57,10 @@ COALESCE_BYTES = 64 * 1024
 
 HEARTBEAT = 20.0
 """Seconds between WebSocket pings: a page that has gone (a laptop closed) is noticed."""
+
+BINARY = "a binary frame: send each request as a text frame of JSON"
+"""The error line a binary frame gets (the protocol is JSON text): a client that sent its
+request as bytes waited for ever for a reply when the frame was dropped without a word."""
 
 MAX_CONNECTIONS = 64
 """Connections the dashboard holds at once; a newcomer beyond them is told so and closed. A
@@ -291,9 +295,12 @@ class WebServer:
                     if line.strip():
                         self.control.request(line, writer, lock, allowed)
                         await self.control.backlog(writer)
+                elif message.type is WSMsgType.BINARY:  # not the protocol's: said, not dropped
+                    async with lock:
+                        writer.write(encode({"id": None, "ok": False, "error": BINARY}))
+                        await writer.drain()
                 elif message.type is WSMsgType.ERROR:
                     break
-                # binary frames are not the protocol's: ignored
         except ConnectionError:
             pass
         finally:

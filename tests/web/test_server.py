@@ -225,6 +225,22 @@ async def test_read_only_unless_control_is_on(tmp_path: Path) -> None:
             assert (await p.ask(op, board="xy"))["ok"] is True
 
 
+async def test_a_binary_frame_gets_a_one_line_error_not_silence(tmp_path: Path) -> None:
+    """The protocol is JSON text (one request a text frame). A binary frame, a JSON request
+    sent as bytes included, was dropped without a word, and a client waiting for its reply
+    waited for ever. Now it gets one error line, and the socket goes on."""
+    async with dashboard(tmp_path) as dash, page(dash) as p:
+        assert (await p.next() or {})["kind"] == "hello"
+        await p.socket.send_bytes(b'{"id":1,"op":"boards"}')
+        reply = await p.next()
+        assert reply == {
+            "id": None,
+            "ok": False,
+            "error": "a binary frame: send each request as a text frame of JSON",
+        }
+        assert (await p.ask("boards"))["ok"] is True
+
+
 async def test_with_control_the_page_acts_like_omsd_ctl(tmp_path: Path) -> None:
     async with dashboard(tmp_path, control=True) as dash, page(dash) as p:
         assert (await p.next() or {})["control"] is True
