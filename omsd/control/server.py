@@ -45,6 +45,12 @@ MAX_PENDING = 512
 that many, the connection is read no further until one is answered. A client that asked and
 never read the answers had every line it sent made a task at once: 1.6 GB in 15 s."""
 
+GRACE = 1.0
+"""Seconds the requests of a connection whose input has ended have to be answered before they
+end: a client that half-closes after its last request (``printf ... | nc -NU``) had them
+cancelled unanswered, the last line too; one that has gone for good has its waits end this
+late at most."""
+
 MAX_WAITS = 256
 """``wait`` operations in progress at once, of all the connections of one control server (the
 socket's and its TCP endpoint's together; the dashboard and the MQTT bridge have one each, with
@@ -172,6 +178,7 @@ class ControlServer:
                 except ConnectionError:
                     break
                 if not line:
+                    await self.answered(writer)
                     break
                 if not line.strip():
                     continue
@@ -204,6 +211,14 @@ class ControlServer:
         answers is held off instead of buffered."""
         while len(mine := self._requests.get(writer, ())) >= MAX_PENDING:
             await asyncio.wait(set(mine), return_when=asyncio.FIRST_COMPLETED)
+
+    async def answered(self, writer: Writer) -> None:
+        """The client of ``writer`` has sent all it will (the end of its input: a half-close,
+        as ``printf ... | nc -NU`` does, or gone): wait up to :data:`GRACE` for the answers to
+        what it asked before the connection is forgotten."""
+        mine = self._requests.get(writer)
+        if mine:
+            await asyncio.wait(set(mine), timeout=GRACE)
 
     def forget(self, writer: Writer) -> None:
         """A connection has ended: what it asked and is still in progress (its waits) ends, its

@@ -875,6 +875,24 @@ def raw_request(s: socket.socket, reader: Any, line: bytes) -> dict[str, Any]:
     return reply
 
 
+def test_a_client_that_stops_sending_still_gets_its_answers(bench: Callable[..., Bench]) -> None:
+    """``printf '...' | nc -NU control.sock`` sends its requests and half-closes: the end of
+    its input came with them, the daemon took it for the client gone and cancelled what it had
+    just read, and the client read nothing but the end (the last line, without its newline,
+    was never answered at all). Now what was asked is answered, a wait that does not end within
+    ``GRACE`` seconds excepted (a client that has gone for good takes its waits with it)."""
+    b = bench()
+    requests = b"".join(b'{"id":%d,"op":"state"}\n' % i for i in range(20))
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.settimeout(TIMEOUT)
+        s.connect(str(b.socket))
+        s.sendall(requests + b'{"id":20,"op":"boards"}')
+        s.shutdown(socket.SHUT_WR)
+        replies = [json.loads(line) for line in s.makefile("rb")]
+    assert sorted(r["id"] for r in replies) == list(range(21))
+    assert all(r["ok"] for r in replies)
+
+
 def test_bad_requests_get_one_line_errors_and_the_connection_stays(
     bench: Callable[..., Bench],
 ) -> None:
