@@ -13,11 +13,12 @@ boards it wants and gets a running daemon back::
         boards["xy"].tcp, boards["xy"].pty   # ("127.0.0.1", 40123), Path(".../xy")
 
 Each call writes a TOML configuration (``omsd.toml`` in a directory of the test's
-``tmp_path``; the keys are those of ``config/omsd.toml``), starts ``python -m omsd --config``
-as a subprocess with every board on a free TCP port of 127.0.0.1 (port 0, read back from the
-daemon's endpoint lines on standard output) and, with ``pty=True``, on a pty whose link is in
-that directory; the control socket is there too. It returns once every endpoint line is in and
-the control client is connected. Teardown closes every connection the helpers opened, sends the
+``tmp_path``; the keys are those of ``config/omsd.toml``), starts ``python -m omsd.tethered
+--config`` (``omsd --config`` that stops when this process is gone) as a subprocess with every
+board on a free TCP port of 127.0.0.1 (port 0, read back from the daemon's endpoint lines on
+standard output) and, with ``pty=True``, on a pty whose link is in that directory; the control
+socket is there too. It returns once every endpoint line is in and the control client is
+connected. Teardown closes every connection the helpers opened, sends the
 daemon SIGTERM, waits for it (and kills it if it does not go within ten seconds, which fails
 the test), and removes any pty link or socket a killed daemon left behind. A daemon that
 cannot start fails the test with one line: what happened and the daemon's standard error. When
@@ -43,6 +44,10 @@ afterwards"; the rest is left open):
 * The daemon runs the omsd this module belongs to (its directory is put first on
   ``PYTHONPATH``), without systemd's notify socket or journal even when the tests run under
   systemd, so it never reports "ready" to a unit that is not its own.
+* The daemon stops when the test run that started it is gone, also when the run could not tear
+  down (a CI timeout's SIGTERM, SIGKILL): it runs as :mod:`omsd.tethered`, whose standard input
+  is a pipe from this process and whose end of file is SIGTERM. In a session of its own (so that
+  a Ctrl-C reaches pytest, which tears down, and not the daemon) it would otherwise serve on.
 * A daemon that exited during the test without being asked to (:meth:`Omsd.stop`) fails the test
   at teardown with its exit status and standard error: a crash of the emulator is a finding.
 """
@@ -345,8 +350,8 @@ class Omsd:
             [here, *(p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p)]
         )
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "omsd", "--config", str(config)],
-            stdin=subprocess.DEVNULL,
+            [sys.executable, "-m", "omsd.tethered", "--config", str(config)],
+            stdin=subprocess.PIPE,  # its end of file stops the daemon: this process is gone
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
@@ -535,6 +540,9 @@ class Omsd:
         return problems
 
     def _join(self) -> None:
+        if self.process.stdin is not None:
+            with contextlib.suppress(OSError):
+                self.process.stdin.close()
         for drain in (self._out, self._err):
             drain.join(STOP_TIMEOUT)
             with contextlib.suppress(OSError):

@@ -22,6 +22,7 @@ import signal
 import stat
 import subprocess
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -36,6 +37,7 @@ pytest_plugins = ["pytester"]
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 RUN_TIMEOUT = 120.0  # seconds for a whole inner pytest run (each of its waits is bounded too)
+STOP = 10.0  # seconds a daemon may take to stop
 
 
 # -- helpers ------------------------------------------------------------------------------------
@@ -80,7 +82,8 @@ def run_inner(pytester: pytest.Pytester, *args: str) -> pytest.RunResult:
 
 
 def omsd_processes(under: Path) -> list[int]:
-    """Live ``python -m omsd`` processes with an argument inside ``under``."""
+    """Live ``python -m omsd`` (or ``omsd.tethered``, the plugin's) processes with an argument
+    inside ``under``."""
     found = []
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -92,7 +95,8 @@ def omsd_processes(under: Path) -> list[int]:
             continue  # gone meanwhile
         if state == "Z":
             continue
-        if "omsd" in argv and any(a.startswith(str(under)) for a in argv):
+        ours = any(a == "omsd" or a.startswith("omsd.") for a in argv)
+        if ours and any(a.startswith(str(under)) for a in argv):
             found.append(int(entry.name))
     return found
 
@@ -410,3 +414,61 @@ def test_serial_reaches_a_board_served_on_ipv6(tmp_path: Path) -> None:
     finally:
         problems = factory.close()
     assert problems == []
+
+
+# -- a test run that dies -----------------------------------------------------------------------
+
+ABANDONED = """
+import json
+import time
+from pathlib import Path
+
+
+def test_run_is_killed_here(omsd_boards):
+    boards = omsd_boards(pty=True)
+    link = boards["board1"].pty
+    Path({record!r}).write_text(
+        json.dumps({{"pid": boards.pid, "socket": str(boards.control_socket), "pty": str(link)}})
+    )
+    time.sleep(60)
+"""
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL])
+def test_a_killed_test_run_takes_its_daemons_with_it(
+    pytester: pytest.Pytester, sig: signal.Signals
+) -> None:
+    """A run stopped by a CI timeout (SIGTERM: Python's default action, no teardown) or the
+    OOM killer (SIGKILL) cannot tear down its fixtures; the daemon of its test, in a session of
+    its own, lived on, serving its ports, socket and pty link for ever. It stops when the run
+    that started it has gone: it reads its standard input, a pipe whose other end only the run
+    holds, and the end of that file is SIGTERM, a clean stop."""
+    record = pytester.path / "record.json"
+    pytester.makepyfile(test_abandoned=ABANDONED.format(record=str(record)))
+    plugin = [] if entry_point_installed() else ["-p", "omsd.testing"]
+    run = pytester.popen(
+        [sys.executable, "-m", "pytest", *plugin, "-p", "no:cacheprovider", "-q"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.monotonic() + RUN_TIMEOUT
+        while not record.exists() or not record.read_text():
+            assert run.poll() is None and time.monotonic() < deadline, "the daemon did not start"
+            time.sleep(0.05)
+        seen = json.loads(record.read_text())
+        run.send_signal(sig)
+        run.wait(STOP)
+        deadline = time.monotonic() + STOP
+        while alive(seen["pid"]) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        orphan = alive(seen["pid"])
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait()
+    if orphan:
+        os.kill(seen["pid"], signal.SIGKILL)
+    assert not orphan, "the daemon outlived the test run that started it"
+    assert not os.path.lexists(seen["socket"]) and not os.path.lexists(seen["pty"])
+    assert_clean(pytester)
