@@ -671,6 +671,12 @@ class OmsdBoards:
         specs: dict[str, str | Mapping[str, object]] = {}
         for i, model in enumerate(models):
             specs[f"board{i + 1}"] = model
+        for name, spec in named.items():
+            if not isinstance(spec, str | Mapping):
+                raise TypeError(
+                    f"omsd_boards({name}={spec!r}): {name} is no option ({', '.join(_OPTIONS)})"
+                    " and a board is a model name or a table of [[board]] keys"
+                )
         for name, spec in [*(boards or {}).items(), *named.items()]:
             if name in specs:
                 raise ValueError(f"board {name} is given twice")
