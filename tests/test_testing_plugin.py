@@ -472,3 +472,38 @@ def test_a_killed_test_run_takes_its_daemons_with_it(
     assert not orphan, "the daemon outlived the test run that started it"
     assert not os.path.lexists(seen["socket"]) and not os.path.lexists(seen["pty"])
     assert_clean(pytester)
+
+
+def test_a_misspelt_option_is_named_as_one(tmp_path: Path) -> None:
+    """``omsd_boards(ptty=True)`` took ``ptty`` for a board and said "board ptty: expected a
+    model name or a table of [[board]] keys, got True": the user wrote an option. The message
+    names the keyword and the options it might have meant; nothing is started."""
+    factory = OmsdBoards(tmp_path)
+    try:
+        with pytest.raises(TypeError) as raised:
+            factory(stage="PC48-4E", ptty=True)
+        message = str(raised.value)
+        assert message.startswith("omsd_boards(ptty=True): ptty is no option (")
+        assert "pty" in message.split("(", 2)[2] and "[[board]]" in message
+        with pytest.raises(TypeError, match=r"^board stage: expected a model name"):
+            factory(boards={"stage": 42})  # not a keyword: a board, as before
+        assert factory.daemons == []
+    finally:
+        assert factory.close() == []
+
+
+def test_the_documented_switches(
+    pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """README: "``-p no:omsd`` turns it off, and ``-p omsd`` on where
+    ``PYTEST_DISABLE_PLUGIN_AUTOLOAD=1``"."""
+    if not entry_point_installed():
+        pytest.skip("omsd's installed metadata has no pytest11 entry point")
+    pytester.makepyfile(test_one="def test_one(omsd_boards):\n    omsd_boards()\n")
+    off = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-p", "no:omsd")
+    off.assert_outcomes(errors=1)
+    off.stdout.fnmatch_lines(["*fixture 'omsd_boards' not found*"])
+    monkeypatch.setenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", "1")
+    on = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-p", "omsd")
+    on.assert_outcomes(passed=1)
+    assert_clean(pytester)
