@@ -99,6 +99,7 @@ show (``omsd.telemetry.traffic.VIEW_BATCH``)."""
 
 _SUN_PATH_MAX = 100  # bytes; sockaddr_un.sun_path is 108 with its NUL, keep a margin
 _ENV_DROP = ("NOTIFY_SOCKET", "JOURNAL_STREAM", "WATCHDOG_USEC", "WATCHDOG_PID", "LISTEN_FDS")
+_ENDPOINTS = ("tcp", "pty", "serial_port", "rfc2217")  # [[board]] keys: an endpoint line each
 _OPTIONS = ("boards", "tcp", "pty", "link", "state", "timeout")
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 
@@ -587,7 +588,8 @@ def _toml_value(value: object, where: str) -> str:
 
 
 def _count(value: object) -> int:
-    """Endpoint lines a ``tcp``/``pty`` key gives: one per item."""
+    """Endpoint lines an endpoint key (``tcp``, ``pty``, ``serial_port``, ``rfc2217``) gives:
+    one per item."""
     if value is None or value is False:
         return 0
     return len(value) if isinstance(value, list | tuple) else 1
@@ -699,7 +701,7 @@ class OmsdBoards:
             plan.table("[state]", {"file": str(file)})
         for name, spec in specs.items():
             table = _board_table(name, spec, directory, tcp, pty, link)
-            plan.endpoints += _count(table.get("tcp")) + _count(table.get("pty"))
+            plan.endpoints += sum(_count(table.get(key)) for key in _ENDPOINTS)
             plan.table("[[board]]", table)
         config = directory / "omsd.toml"
         config.write_text(plan.text)

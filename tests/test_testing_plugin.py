@@ -507,3 +507,22 @@ def test_the_documented_switches(
     on = pytester.runpytest_subprocess("-p", "no:cacheprovider", "-p", "omsd")
     on.assert_outcomes(passed=1)
     assert_clean(pytester)
+
+
+def test_every_endpoint_a_board_table_names_is_waited_for(tmp_path: Path) -> None:
+    """A board's table passes any ``[[board]]`` key through, ``rfc2217`` and ``serial_port``
+    too, and the daemon prints an endpoint line for each of them; the fixture counted the lines
+    of ``tcp`` and ``pty`` only, so it returned early and parsed the first lines: here it said
+    "no board 'z'; boards: xy". Every endpoint line is waited for."""
+    factory = OmsdBoards(tmp_path)
+    try:
+        daemon = factory(
+            xy={"model": "PC48-4E", "tcp": False, "rfc2217": ["127.0.0.1:0", "127.0.0.1:0"]},
+            z="PC48-2",
+        )
+        assert daemon["xy"].tcp is None and len(daemon["xy"].rfc2217s) == 2
+        assert daemon["z"].tcp is not None
+        with daemon.connect("z") as link:
+            assert link.ask(b"WY") == b"PC48 ver 3.00-2"
+    finally:
+        assert factory.close() == []
