@@ -76,7 +76,9 @@ async def session(r: Rig, model: str) -> None:
     await r.send(b"AX; VL30000 MR3000 GO MR-3000 GO ID")  # queued: out and back
     await poll(r, b"AX RP RV", 3, answers=2)
     assert await r.marker() == b"!\x01\n"
-    await r.send(b"AY VL20000 MR1500 GO ID AX MR-200 GO ID")  # two axes, two markers
+    # two axes, two markers: Y done 0.22 s after X (MR1500 was 5 ms: a stand-in card woken 5 ms
+    # late read both in one read of the done register, one "!\x03", PC48 §7.3.3)
+    await r.send(b"AY VL20000 MR6000 GO ID AX MR-200 GO ID")
     await poll(r, b"AA RP", 3)
     assert {await r.marker(), await r.marker()} == {b"!\x01\n", b"!\x02\n"}
     if model.startswith("PCIX"):
