@@ -246,8 +246,8 @@ class Core:
 
     def take_output_sourced(self) -> tuple[list[Output], list[int]]:
         """The output and, item by item, the session whose conversation produced it."""
-        sources = self._sources
-        out = self.take_output()
+        out, sources = self._output, self._sources
+        self._output, self._sources = [], []
         return out, sources
 
     def take_bytes(self) -> bytes:

@@ -368,6 +368,12 @@ class DriverLink:
                 return self.collect_all(out, sources, now)
             texts.append(item.text)
         pieces, eos, echoing = self._pieces, self.eos, self._echoing
+        source = sources[0]
+        if not echoing and sources.count(source) == len(sources):
+            # (one session's replies, no echo to end: merged one by one, they would be one
+            # piece all the same)
+            merge(pieces, source, eos.join(texts) + eos)
+            return False
         for text, source in zip(texts, sources, strict=True):
             if source in echoing:
                 self._end_echo(source)
