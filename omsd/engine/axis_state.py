@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from omsd.engine import profiles as pf
 from omsd.engine.clock import SampleClock
-from omsd.engine.counter import counted
+from omsd.engine.counter import count_at
 from omsd.engine.extensions import Options
 from omsd.engine.queue import CommandQueue, SyncGroup
 from omsd.engine.states import Gear, HomeSearch, Motion, Pending, Wait
@@ -271,8 +271,9 @@ class AxisState:
 
     def counter(self, t: float) -> int:
         """The position register: whole steps emitted so far."""
-        x = self.traj.position(t)
-        return math.floor(x + 0.5) if self.motion is _IDLE else counted(self.traj, x, t)
+        if self.motion is _IDLE:
+            return math.floor(self.traj.position(t) + 0.5)
+        return count_at(self.traj, t)
 
     def velocity(self, t: float) -> float:
         return self.traj.velocity(t)
@@ -292,10 +293,9 @@ class AxisState:
         and the carriage are apart after a home, a load, an encoder ratio or backlash."""
         if self.stall_phys is not None:
             return self.stall_phys
-        x = self.traj.position(t)
-        if self.motion is not _IDLE:
-            x = float(counted(self.traj, x, t))
-        return x + self.phys_offset
+        if self.motion is _IDLE:
+            return self.traj.position(t) + self.phys_offset
+        return float(count_at(self.traj, t)) + self.phys_offset
 
     @property
     def moving(self) -> bool:

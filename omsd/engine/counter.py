@@ -42,6 +42,18 @@ def counted(traj: Trajectory, x: float, t: float) -> int:
     return steps(x, origin)
 
 
+def count_at(traj: Trajectory, t: float) -> int:
+    """:func:`counted` at ``t`` on ``traj`` (at its position then), the last one found kept on
+    the trajectory (``Trajectory.count_seen``; a trajectory never changes): a poll asks for
+    one instant's count more than once (QA's carriage, RP's counter)."""
+    seen = traj.count_seen
+    if seen[0] == t:
+        return seen[1]
+    count = counted(traj, traj.position(t), t)
+    traj.count_seen = (t, count)
+    return count
+
+
 def _onward_from(x: float, way: float) -> int:
     """The count at ``x`` where a motion from rest leaves the ``way`` way."""
     eps = 1e-6

@@ -25,8 +25,10 @@ _BISECT_ITERATIONS = 80
 _REACH_MARGIN = 1e-3
 
 
-#: ``Trajectory._seen`` before any position is found (no time is NaN).
+#: ``Trajectory._seen`` before any position is found (no time is NaN); ``count_seen`` before
+#: any count is.
 _NOT_SEEN = (math.nan, math.nan)
+_NOT_COUNTED = (math.nan, 0)
 
 
 class Trajectory:
@@ -50,6 +52,7 @@ class Trajectory:
         "_starts",
         "_turns",
         "count",
+        "count_seen",
         "duration",
         "end_time",
         "final",
@@ -91,6 +94,8 @@ class Trajectory:
         self._course: Course | None = None
         self._turns: bool | None = None
         self._seen = _NOT_SEEN
+        # the last position counter found (omsd.engine.counter.count_at), kept as _seen is
+        self.count_seen: tuple[float, int] = _NOT_COUNTED
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
@@ -119,6 +124,7 @@ class Trajectory:
         traj._course = course
         traj._turns = course.turns
         traj._seen = _NOT_SEEN
+        traj.count_seen = _NOT_COUNTED
         return traj
 
     @property
@@ -152,6 +158,19 @@ class Trajectory:
     def velocity(self, t: float) -> float:
         i, tau = self._locate(t)
         return 0.0 if i < 0 else self.pieces[i].v(tau)
+
+    def position_velocity(self, t: float) -> tuple[float, float]:
+        """``(position(t), velocity(t))``, the piece running at ``t`` found once (a status
+        asks for both): the same numbers, to the last bit."""
+        i, tau = self._locate(t)
+        if i < 0:
+            return self.position(t), 0.0
+        piece = self.pieces[i]
+        if t <= self.t0 or t >= self.end_time or self._seen[0] == t:
+            return self.position(t), piece.v(tau)
+        x = self._offsets[i] + piece.x(tau)
+        self._seen = (t, x)
+        return x, piece.v(tau)
 
     def acceleration(self, t: float) -> float:
         i, tau = self._locate(t)

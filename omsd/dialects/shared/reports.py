@@ -10,6 +10,7 @@ from omsd.dialects.interpreter import Interpreter
 from omsd.dialects.shared.table import handles
 from omsd.engine import profiles as pf
 from omsd.engine.axis import Axis, Motion
+from omsd.engine.axis_status import status_inputs
 from omsd.engine.registers import OVRT
 from omsd.models.spec import Cell
 from omsd.protocol.lexer import Command
@@ -18,14 +19,10 @@ from omsd.protocol.lexer import Command
 def status(axis: Axis, t: float) -> str:
     """RA/QA field (PC48 §6.13 RA): direction P/M, done D/N, overtravel L/N (in the direction
     of char 4), home H/N. The switches see the carriage once, at ``t`` (as a snapshot does)."""
-    d = axis.heading(t)
-    carriage = axis.carriage(t)
-    return (
-        ("P" if d > 0 else "M")
-        + ("D" if axis.done else "N")
-        + ("L" if axis.limit_active(d, t, carriage) else "N")
-        + ("H" if axis.home_sensed(t, carriage) else "N")
-    )
+    d, limit, home = status_inputs(axis, t)
+    way = "P" if d > 0 else "M"
+    done = "D" if axis.done else "N"
+    return f"{way}{done}{'L' if limit else 'N'}{'H' if home else 'N'}"
 
 
 # -- 6.13 status requests -------------------------------------------------------------------------

@@ -1,0 +1,79 @@
+"""The readings a status poll makes on its fast path say what the straightforward ones say
+(issue 16): ``Trajectory.position_velocity``, ``counter.count_at`` and
+``axis_status.status_inputs``, to the last bit, around the switches and the ends of motion."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omsd.board import Board
+from omsd.board.world import AxisWorld
+from omsd.engine.axis_status import status_inputs
+from omsd.engine.counter import count_at, counted
+from omsd.engine.pieces import cruise
+from omsd.engine.ramps import RampShape, move_pieces
+from omsd.engine.trajectory import Trajectory
+from omsd.engine.world import SwitchType
+from omsd.models import get_model
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    distance=st.integers(-100_000, 100_000).filter(bool),
+    jog=st.sampled_from([None, 2000.0, -3000.0]),
+    t0=st.sampled_from([0.0, 0.1, 12.345]),
+    x0=st.sampled_from([0.0, -40.12, 700.195, 1e6 + 0.5]),
+    times=st.lists(st.floats(-0.5, 5.0), min_size=1, max_size=6),
+)
+def test_position_velocity_and_the_kept_count_are_the_computed_ones(
+    distance: int, jog: float | None, t0: float, x0: float, times: list[float]
+) -> None:
+    pieces = move_pieces(float(distance), 5000.0, 50000.0, 0.0, RampShape())
+    if jog is not None:
+        pieces = [*pieces, cruise(jog)]
+    traj = Trajectory(t0, x0, pieces, None if jog is not None else x0 + distance)
+    plain = Trajectory(t0, x0, pieces, traj.final)
+    ends = [0.0, traj.duration] if traj.is_finite else [0.0]
+    for t in [t0 + dt for dt in times + ends + times[:1]]:  # (one instant twice: kept)
+        assert traj.position_velocity(t) == (plain.position(t), plain.velocity(t))
+        assert count_at(traj, t) == counted(plain, plain.position(t), t)
+        assert traj.position(t) == plain.position(t)
+
+
+WORLDS = [
+    AxisWorld(negative_limit=-50.0, positive_limit=50.0, home_low=-2.0, home_high=3.0),
+    AxisWorld(
+        negative_limit=-50.0,
+        positive_limit=50.0,
+        home_low=-2.0,
+        home_high=3.0,
+        home_switch=SwitchType.NORMALLY_CLOSED,
+    ),
+]
+
+
+@pytest.mark.parametrize("world", WORLDS)
+@pytest.mark.parametrize("setup", ["", "HH;", "LH;", "ER2,1;MR0;GO;LP5;"])
+@pytest.mark.parametrize("motion", ["JG400;", "JG-400;", "MR80;GO;", "MR-80;GO;", "MR3;GO;"])
+def test_a_status_read_in_a_plain_world_is_the_straightforward_one(
+    world: AxisWorld, setup: str, motion: str
+) -> None:
+    """Through the home switch and onto a limit, either way, each home level and switch type,
+    with the counter loaded away from the carriage: every 5 ms, the fast reading is the
+    straightforward one (``fast_paths`` off for the reading only)."""
+    board = Board(get_model("PC48-4"), world={"X": world})
+    board.receive(f"AX;VL400;AC4000;{setup}{motion}".encode(), 0.0)
+    axis = board.axes[0]
+    for k in range(1, 80):
+        t = k * 0.005 + (1e-9 if k % 7 == 0 else 0.0)
+        board.advance(t)
+        fast = status_inputs(axis, t)
+        board.fast_paths = False
+        try:
+            plain = status_inputs(axis, t)
+            straight = axis.heading(t), axis.limit_active(axis.heading(t), t), axis.home_sensed(t)
+        finally:
+            board.fast_paths = True
+        assert fast == plain == straight
