@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from omsd.dialects import framing, lookup
-from omsd.dialects.interpreter import Blocked, CommandFailed, Interpreter
+from omsd.dialects.interpreter import BareReport, Blocked, CommandFailed, Interpreter
 from omsd.engine.axis import Axis
 from omsd.engine.events import Reply
 from omsd.engine.machine import Machine
@@ -86,6 +86,8 @@ class Board(Machine):
         self._replies: dict[bytes, tuple[bytes, bytes | None]] = {}
         # what _scan found in the runs of reports polled (the words of a language are fixed)
         self._scans: dict[bytes, list[tuple[int, Command]]] = {}
+        # how _run_planned runs them, by their bytes and the mode and axis they begin in
+        self._plans: dict[tuple[bytes, str, int], list[BareReport]] = {}
         self._replies_epoch = -1
         self.power_up(now)
 
@@ -274,6 +276,9 @@ class Board(Machine):
             self.talker = self.input_source
             self.rest_epoch += 1
             full = interp.capacity  # where the regular way finds the buffer full, and settles
+            if ready is not None and found[-1][0] <= full:  # (no settle among them)
+                self._run_planned(data, found, now)
+                found = []
             for end, word in found:
                 while full < end:
                     if not self.at_rest(now):
@@ -285,6 +290,40 @@ class Board(Machine):
             self.settle(now)
             self.advance(now)
         return True
+
+    def _run_planned(self, data: bytes, found: list[tuple[int, Command]], now: float) -> None:
+        """Run the words ``found`` in ``data`` (reports and selections of an axis, with no
+        contour or table being defined) as ``Interpreter.run_bare`` runs each, by a plan: the
+        handler and cell its checks give (``Interpreter.ready``), word by word, found the first
+        time ``data`` is run in this mode on this axis and kept. The checks of a word depend
+        only on the mode and axis it is run in, and those only on the mode and axis the run
+        began in: a report changes neither, and a selection sets them whatever they were (or
+        fails, and changes nothing). A run with a word that fails its checks (``ready``: None)
+        has an empty plan: it is run word by word each time."""
+        interp = self.interpreter
+        plans = self._plans
+        key = (data, interp.mode, interp.axis_index)
+        plan = plans.get(key)
+        if not plan:
+            entries = []
+            for _, word in found:
+                entries.append(interp.ready(word))
+                if not interp.run_bare(word, now):
+                    raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
+            if plan is None:
+                if len(plans) >= SCANS_KEPT:
+                    plans.clear()
+                ready = [(*e, w) for e, (_, w) in zip(entries, found, strict=True) if e is not None]
+                plans[key] = ready if len(ready) == len(found) else []
+            return
+        for handler, cell, command in plan:  # (run_bare, written out)
+            interp.depth = 0
+            try:
+                handler(interp, command, cell, now)
+            except Blocked as exc:
+                raise AssertionError(f"{command.mnemonic}, a report, waited") from exc
+            except (CommandFailed, OperandError) as exc:
+                self.command_error(exc.kind, command.text, now)
 
     def _keep_reply(self, data: bytes, said: int) -> None:
         """Keep the reply of the pure report ``data`` just run (see :meth:`_reports_at_rest`),

@@ -1017,7 +1017,15 @@ def test_first_time_says_the_same_with_and_without_the_extent(
 
 
 #: What ``Board`` and the PCIx interpreter set of their own (they keep a dict for it).
-BOARD_OWN = {"_replies", "_replies_epoch", "_scans", "dialect", "interpreter", "pure_reports"}
+BOARD_OWN = {
+    "_plans",
+    "_replies",
+    "_replies_epoch",
+    "_scans",
+    "dialect",
+    "interpreter",
+    "pure_reports",
+}
 PCIX_OWN = {"macros", "table", "table_points"}
 
 

@@ -1,12 +1,17 @@
 """The readings a status poll makes on its fast path say what the straightforward ones say
 (issue 16): ``Trajectory.position_velocity``, ``counter.count_at`` and
-``axis_status.status_inputs``, to the last bit, around the switches and the ends of motion."""
+``axis_status.status_inputs``, to the last bit, around the switches and the ends of motion; and
+a run of reports polled again and again, run by its kept plan, says what the straightforward
+board says."""
 
 from __future__ import annotations
+
+import random
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from twin import Twin
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
@@ -16,7 +21,7 @@ from omsd.engine.pieces import cruise
 from omsd.engine.ramps import RampShape, move_pieces
 from omsd.engine.trajectory import Trajectory
 from omsd.engine.world import SwitchType
-from omsd.models import get_model
+from omsd.models import MODELS, get_model
 
 
 @settings(max_examples=300, deadline=None)
@@ -77,3 +82,32 @@ def test_a_status_read_in_a_plain_world_is_the_straightforward_one(
         finally:
             board.fast_paths = True
         assert fast == plain == straight
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_runs_of_reports_polled_again_and_again_say_the_same(model: str) -> None:
+    """A few runs of reports and selections (any spelling, separators or none, an axis the
+    model lacks, a word that fails its checks in the mode it is run in), each polled many times
+    in whatever mode and on whatever axis the last left, among moves and jogs: the board runs
+    them by its kept plans (``Board._run_planned``) and says what the straightforward board
+    says."""
+    rng = random.Random(model)
+    twin = Twin(get_model(model))
+    words = sorted(twin.interpreter.words.reports)
+    pool = [
+        b"".join(
+            rng.choice(words) + rng.choice([b" ", b";", b""]) for _ in range(rng.randint(2, 5))
+        )
+        for _ in range(8)
+    ]
+    moves = [b"AX;VL2000;AC20000;JG1000;", b"AY;MR300;GO;", b"AA;ST;", b"AX;JG-500;", b"AM;"]
+    now = 0.0
+    for k in range(300):
+        if k % 40 == 0:
+            twin.receive(moves[k // 40 % len(moves)], now, 1)
+        twin.receive(rng.choice(pool), now, 1)
+        twin.take_output_sourced()
+        now += rng.choice([0.0, 0.01, 0.1])
+        if rng.random() < 0.2:
+            twin.advance(now)
+    assert any(twin.fast._plans.values())  # (the plans were run, not only made)
