@@ -86,7 +86,7 @@ class Board(Machine):
         self._replies: dict[bytes, tuple[bytes, bytes | None]] = {}
         # what _scan found in the runs of reports polled (the words of a language are fixed)
         self._scans: dict[bytes, list[tuple[int, Command]]] = {}
-        # how _run_planned runs them, by their bytes and the mode and axis they begin in
+        # how _run_plan runs them, by their bytes and the mode and axis they begin in
         self._plans: dict[tuple[bytes, str, int], list[BareReport]] = {}
         self._replies_epoch = -1
         self.power_up(now)
@@ -253,6 +253,16 @@ class Board(Machine):
                 self._keep_reply(data, said)
             if self.settled and not self.deadline_stale:
                 return True  # still at rest: its deadline is the one at_rest looked at
+        elif ready is not None and (
+            plan := self._plans.get((data, interp.mode, interp.axis_index))
+        ):
+            # a run of reports polled before, in this mode on this axis: run by its plan
+            self.now = now
+            self.talker = self.input_source
+            self.rest_epoch += 1
+            self._run_plan(plan, now)
+            if self.settled and not self.deadline_stale:
+                return True  # still at rest: its deadline is the one at_rest looked at
         elif (word := (words := interp.report_words).get(data)) is not None:
             # one word not ready here (a check fails: run_bare says why)
             self.now = now
@@ -277,7 +287,7 @@ class Board(Machine):
             self.rest_epoch += 1
             full = interp.capacity  # where the regular way finds the buffer full, and settles
             if ready is not None and found[-1][0] <= full:  # (no settle among them)
-                self._run_planned(data, found, now)
+                self._plan(data, found, now)
                 found = []
             for end, word in found:
                 while full < end:
@@ -291,32 +301,34 @@ class Board(Machine):
             self.advance(now)
         return True
 
-    def _run_planned(self, data: bytes, found: list[tuple[int, Command]], now: float) -> None:
+    def _plan(self, data: bytes, found: list[tuple[int, Command]], now: float) -> None:
         """Run the words ``found`` in ``data`` (reports and selections of an axis, with no
-        contour or table being defined) as ``Interpreter.run_bare`` runs each, by a plan: the
-        handler and cell its checks give (``Interpreter.ready``), word by word, found the first
-        time ``data`` is run in this mode on this axis and kept. The checks of a word depend
-        only on the mode and axis it is run in, and those only on the mode and axis the run
-        began in: a report changes neither, and a selection sets them whatever they were (or
-        fails, and changes nothing). A run with a word that fails its checks (``ready``: None)
-        has an empty plan: it is run word by word each time."""
+        contour or table being defined) one by one (``Interpreter.run_bare``), and keep their
+        plan for the next time ``data`` is run in this mode on this axis (:meth:`_run_plan`):
+        the handler and cell the checks of each word give (``Interpreter.ready``). The checks
+        of a word depend only on the mode and axis it is run in, and those only on the mode and
+        axis the run began in: a report changes neither, and a selection sets them whatever
+        they were (or fails, and changes nothing). A run with a word that fails its checks
+        (``ready``: None) has an empty plan: it is run word by word each time."""
         interp = self.interpreter
         plans = self._plans
         key = (data, interp.mode, interp.axis_index)
-        plan = plans.get(key)
-        if not plan:
-            entries = []
-            for _, word in found:
-                entries.append(interp.ready(word))
-                if not interp.run_bare(word, now):
-                    raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
-            if plan is None:
-                if len(plans) >= SCANS_KEPT:
-                    plans.clear()
-                ready = [(*e, w) for e, (_, w) in zip(entries, found, strict=True) if e is not None]
-                plans[key] = ready if len(ready) == len(found) else []
-            return
-        for handler, cell, command in plan:  # (run_bare, written out)
+        entries = []
+        for _, word in found:
+            entries.append(interp.ready(word))
+            if not interp.run_bare(word, now):
+                raise AssertionError(f"{word.mnemonic}, a report, waited for queue space")
+        if key not in plans:
+            if len(plans) >= SCANS_KEPT:
+                plans.clear()
+            plan = [(*e, w) for e, (_, w) in zip(entries, found, strict=True) if e is not None]
+            plans[key] = plan if len(plan) == len(found) else []
+
+    def _run_plan(self, plan: list[BareReport], now: float) -> None:
+        """Run a run of reports by its plan (:meth:`_plan`): each word's handler, as
+        ``Interpreter.run_bare`` calls it."""
+        interp = self.interpreter
+        for handler, cell, command in plan:
             interp.depth = 0
             try:
                 handler(interp, command, cell, now)

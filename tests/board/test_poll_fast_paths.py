@@ -89,7 +89,7 @@ def test_runs_of_reports_polled_again_and_again_say_the_same(model: str) -> None
     """A few runs of reports and selections (any spelling, separators or none, an axis the
     model lacks, a word that fails its checks in the mode it is run in), each polled many times
     in whatever mode and on whatever axis the last left, among moves and jogs: the board runs
-    them by its kept plans (``Board._run_planned``) and says what the straightforward board
+    them by its kept plans (``Board._plan``) and says what the straightforward board
     says."""
     rng = random.Random(model)
     twin = Twin(get_model(model))
