@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from decimal import ROUND_HALF_UP, Context, Decimal
@@ -15,14 +16,20 @@ from omsd.engine.registers import OVRT
 from omsd.models.spec import Cell
 from omsd.protocol.lexer import Command
 
+#: The sixteen statuses, by (moving the positive way, done, overtravel, home): each field's
+#: letter when true and when not.
+_FIELDS = (("P", "M"), ("D", "N"), ("L", "N"), ("H", "N"))
+_STATUSES = {
+    flags: "".join(yes if on else no for on, (yes, no) in zip(flags, _FIELDS, strict=True))
+    for flags in itertools.product((False, True), repeat=4)
+}
+
 
 def status(axis: Axis, t: float) -> str:
     """RA/QA field (PC48 §6.13 RA): direction P/M, done D/N, overtravel L/N (in the direction
     of char 4), home H/N. The switches see the carriage once, at ``t`` (as a snapshot does)."""
     d, limit, home = status_inputs(axis, t)
-    way = "P" if d > 0 else "M"
-    done = "D" if axis.done else "N"
-    return f"{way}{done}{'L' if limit else 'N'}{'H' if home else 'N'}"
+    return _STATUSES[d > 0, axis.done, limit, home]
 
 
 # -- 6.13 status requests -------------------------------------------------------------------------
@@ -134,8 +141,9 @@ def _ru(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
 
 @handles("RA", "QA")
 def _ra(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
-    axis = ix.axis
-    ix.machine.reply_status(status(axis, t), t)
+    machine = ix.machine
+    axis = machine.axes[ix.axis_index]  # (ix.axis, written out: the query polled most)
+    machine.reply_status(status(axis, t), t)
     if cmd.mnemonic == "RA":
         _reset_flags(ix, [axis], t)
 
