@@ -162,6 +162,8 @@ class Trajectory:
     def position_velocity(self, t: float) -> tuple[float, float]:
         """``(position(t), velocity(t))``, the piece running at ``t`` found once (a status
         asks for both): the same numbers, to the last bit."""
+        if not self.pieces:  # (at rest: x0 up to t0, then final)
+            return (self.x0 if t <= self.t0 else self.final), 0.0
         i, tau = self._locate(t)
         if i < 0:
             return self.position(t), 0.0

@@ -45,6 +45,8 @@ def test_position_velocity_and_the_kept_count_are_the_computed_ones(
         assert traj.position_velocity(t) == (plain.position(t), plain.velocity(t))
         assert count_at(traj, t) == counted(plain, plain.position(t), t)
         assert traj.position(t) == plain.position(t)
+        rest = Trajectory.at_rest(t0, x0 + distance)  # (no pieces)
+        assert rest.position_velocity(t) == (rest.position(t), rest.velocity(t))
 
 
 WORLDS = [
