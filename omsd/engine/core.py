@@ -246,8 +246,8 @@ class Core:
 
     def take_output_sourced(self) -> tuple[list[Output], list[int]]:
         """The output and, item by item, the session whose conversation produced it."""
-        out, sources = self._output, self._sources
-        self._output, self._sources = [], []
+        sources = self._sources
+        out = self.take_output()
         return out, sources
 
     def take_bytes(self) -> bytes:
