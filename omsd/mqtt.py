@@ -44,7 +44,8 @@ bytes in hex.
 
 Commands: a message on ``<prefix>/<board>/cmd/<op>`` is the control protocol's request
 (:mod:`omsd.control.protocol`) with ``op`` and ``board`` taken from the topic and the other
-arguments from the JSON object in the payload (an empty payload is ``{}``), run by
+arguments from the JSON object in the payload (an empty payload is ``{}``; read as the
+control socket reads a request: no NaN, Infinity or 1e999, at most ``MAX_LINE`` bytes), run by
 :meth:`ControlServer.run`, so it does exactly what the control socket does. The reply goes to
 ``<prefix>/<board>/reply/<op>``: ``{"id": 7, "ok": true, "result": ...}`` or ``{"id": 7, "ok":
 false, "error": "one line"}``, ``id`` echoed from the payload (``null`` without one) so a caller
@@ -95,7 +96,7 @@ from omsd.board.events import (
     Event,
 )
 from omsd.config import MqttConfig
-from omsd.control.protocol import ControlError
+from omsd.control.protocol import MAX_LINE, ControlError, decode
 from omsd.control.server import ControlServer
 from omsd.control.watch import event_record as event_payload  # one event format for both
 from omsd.hostport import host_port
@@ -655,27 +656,29 @@ class MqttBridge:
 
 def _arguments(payload: object) -> dict[str, Any]:
     """A command's payload: a JSON object, or nothing at all for an operation without
-    arguments."""
-    if payload is None or payload == b"" or payload == "":
+    arguments. Read as the control socket reads a request (:func:`omsd.control.protocol.decode`:
+    no NaN, Infinity or 1e999, which would make the command run and its reply, echoing the id,
+    impossible to write) and bounded as it is (:data:`MAX_LINE` bytes: a payload of 100 MB held
+    the boards up for seconds while it was read as JSON, and its id came back in the reply)."""
+    if payload is None:
         return {}
-    if isinstance(payload, bytes | bytearray):
-        try:
-            text = bytes(payload).decode("utf-8")
-        except UnicodeDecodeError:
-            raise ControlError("payload: expected a JSON object in UTF-8") from None
-    else:
-        text = str(payload)
+    data = bytes(payload) if isinstance(payload, bytes | bytearray) else str(payload).encode()
+    if len(data) > MAX_LINE:
+        raise ControlError(f"payload: {len(data)} bytes, more than {MAX_LINE}")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ControlError("payload: expected a JSON object in UTF-8") from None
     if not text.strip():
         return {}
     try:
-        value = json.loads(text)
-    except ValueError as exc:
-        raise ControlError(f"payload: not a JSON object: {exc}") from None
-    except RecursionError:  # json nests by recursion: thousands of [ ran out of stack
-        raise ControlError("payload: not a JSON object: nested too deeply") from None
-    if not isinstance(value, dict):
-        raise ControlError("payload: expected a JSON object of the operation's arguments")
-    return value
+        return decode(data)
+    except ControlError as exc:
+        if str(exc) == "not a JSON object":  # JSON, but not an object
+            raise ControlError(
+                "payload: expected a JSON object of the operation's arguments"
+            ) from None
+        raise ControlError(f"payload: {exc}") from None
 
 
 __all__ = ["MqttBridge", "Outbox", "board_state", "event_payload"]

@@ -612,6 +612,35 @@ async def test_a_payload_nested_too_deeply_is_answered(broker: int) -> None:
         }
 
 
+async def test_a_payload_that_is_not_json_is_refused_before_it_runs(broker: int) -> None:
+    """NaN and 1e999 (which Python's json reads) closed the limit, then the reply, echoing the
+    id, could not be written: it said ``ok: false``, ``bad request: Out of range float values
+    are not JSON compliant``, of a command that had run. A payload of 100 MB was read as JSON
+    while the boards waited (1.7 s), and its id came back in the reply. Both are now refused
+    as the control socket refuses them, before anything runs."""
+    async with running(broker) as run, subscribed(broker) as sub:
+        await connected(run)
+        await sub.wait("xy/state")
+        close = b'"axis": "X", "direction": 1, "active": true}'
+        await sub.publish("omsd/xy/cmd/limit", b'{"id": NaN, ' + close)
+        await sub.publish("omsd/xy/cmd/limit", b'{"id": 1e999, ' + close)
+        huge = b'{"id": "' + b"a" * 70000 + b'", ' + close
+        await sub.publish("omsd/xy/cmd/limit", huge)
+        await sub.publish("omsd/xy/cmd/state", {"id": 4})
+        await sub.wait("xy/reply/state")
+        replies = [m.json() for m in sub.on("xy/reply/limit")]
+        assert replies == [
+            {"id": None, "ok": False, "error": "payload: not a JSON object: NaN is not JSON"},
+            {
+                "id": None,
+                "ok": False,
+                "error": "payload: not a JSON object: 1e999 is beyond a double's range",
+            },
+            {"id": None, "ok": False, "error": f"payload: {len(huge)} bytes, more than 65536"},
+        ]
+        assert (await run.control("state"))["axes"]["X"]["limit_positive"] is False
+
+
 async def test_a_retained_command_is_ignored(broker: int) -> None:
     async with subscribed(broker) as sub:  # left on the broker before the daemon starts
         await sub.publish(
