@@ -261,6 +261,25 @@ async def test_with_control_the_page_acts_like_omsd_ctl(tmp_path: Path) -> None:
         assert await board_says(dash.ports["xy"], b"AX RA", b"N\n") == b"PNNN\n"
 
 
+async def test_a_number_beyond_a_doubles_range_is_answered_and_nothing_runs(
+    tmp_path: Path,
+) -> None:
+    """json reads 1e999 as infinity: the limit closed, the reply echoing the id could not be
+    written, none came, and the log said 'Task exception was never retrieved'."""
+    async with dashboard(tmp_path, control=True) as dash, page(dash) as p:
+        assert (await p.next() or {})["control"] is True
+        await p.socket.send_str(
+            '{"id":1e999,"op":"limit","board":"xy","axis":"X","direction":1,"active":true}'
+        )
+        assert await p.next() == {
+            "id": None,
+            "ok": False,
+            "error": "not a JSON object: 1e999 is beyond a double's range",
+        }
+        state = dash.daemon.services[0].board.snapshot(dash.daemon.services[0].clock())
+        assert state["axes"]["X"]["limit_positive"] is False
+
+
 # -- the stream -----------------------------------------------------------------------------------
 
 
