@@ -192,8 +192,12 @@ class WebServer:
         address that cannot be used raises ``OSError``."""
         app = web.Application(client_max_size=MAX_LINE)
         app.router.add_get("/", self._page)
+        # the page is a file of static/ too: under that name it has the page's guards (the
+        # token), not only the static files' (it works there: its files are named from /)
+        app.router.add_get("/static/index.html", self._page)
         app.router.add_get("/ws", self._socket)
         app.router.add_static("/static/", str(STATIC), follow_symlinks=False)
+        app.on_response_prepare.append(_guard_headers)
         self._handler = _OneLine(self.log)
         _AIOHTTP.addHandler(self._handler)
         _AIOHTTP.propagate = False
@@ -260,12 +264,7 @@ class WebServer:
             body=page,
             content_type="text/html",
             charset="utf-8",
-            headers={
-                "Cache-Control": "no-store",
-                "Content-Security-Policy": POLICY,
-                "X-Content-Type-Options": "nosniff",
-                "Referrer-Policy": "no-referrer",
-            },
+            headers={"Cache-Control": "no-store"},
         )
 
     async def _socket(self, request: web.Request) -> web.StreamResponse:
@@ -309,6 +308,20 @@ class WebServer:
             with contextlib.suppress(Exception):
                 await socket.close()
         return socket
+
+
+GUARD_HEADERS = {
+    "Content-Security-Policy": POLICY,
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+}
+"""The headers of every answer, the page's and its files' (a file served without them, the
+page under /static/index.html, could be framed by another site)."""
+
+
+async def _guard_headers(request: web.Request, response: web.StreamResponse) -> None:
+    for name, value in GUARD_HEADERS.items():
+        response.headers.setdefault(name, value)
 
 
 class _Busy(asyncio.Protocol):

@@ -155,6 +155,28 @@ async def test_the_page_its_files_and_the_vendored_chart_library_are_served(
             assert response.status in (403, 404)
 
 
+async def test_the_page_under_static_has_the_pages_guards(tmp_path: Path) -> None:
+    """/static/index.html served the whole working page (its script and styles are named from
+    the root) without the token, without the Content-Security-Policy and its frame-ancestors
+    'none': another site could frame it and have the user click its buttons (the page in the
+    frame is the dashboard's own origin, so its WebSocket passed the Origin check). Every file
+    now goes with the page's headers, and the page under that name asks for the token too."""
+    async with (
+        dashboard(tmp_path, token=TOKEN) as dash,
+        aiohttp.ClientSession() as session,
+    ):
+        async with session.get(f"{dash.url}/static/index.html") as response:
+            assert response.status == 403
+            assert "token" in await response.text()
+        async with session.get(f"{dash.url}/static/index.html?token={TOKEN}") as response:
+            assert response.status == 200
+            assert "frame-ancestors 'none'" in response.headers["Content-Security-Policy"]
+        for name in ("app.js", "style.css", "vendor/uPlot.iife.min.js", "nonexistent"):
+            async with session.get(f"{dash.url}/static/{name}") as response:
+                assert "frame-ancestors 'none'" in response.headers["Content-Security-Policy"]
+                assert response.headers["X-Content-Type-Options"] == "nosniff"
+
+
 def test_the_page_loads_nothing_from_elsewhere() -> None:
     """Works offline: no CDN, no URL to another host in the page or its own files."""
     for name in ("index.html", "app.js", "style.css"):
