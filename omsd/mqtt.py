@@ -52,7 +52,8 @@ false, "error": "one line"}``, ``id`` echoed from the payload (``null`` without 
 can match replies. Choices: the topic's board and op win over any in the payload; a *retained*
 message on a command topic is ignored (logged once per topic), since it would otherwise be run
 again at every reconnection and every daemon start. A command for a board the daemon does not
-serve is not run and is answered on ``<prefix>/status/reply`` (issue 13: never on a topic
+serve (or whose op is too long for a reply topic) is not run and is answered on
+``<prefix>/status/reply`` (issue 13: never on a topic
 made of a name from outside), ``{"id": 3, "ok": false, "error": "no board 'zz'; boards: xy",
 "board": "zz", "op": "state"}``, QoS 1, not retained.
 
@@ -124,6 +125,10 @@ FAREWELL = 2.0
 
 TIMEOUT = 10.0
 """Seconds the broker has to answer a connection, a subscription or a QoS 1 publication."""
+
+MAX_TOPIC = 65535
+"""Bytes of a topic name, at most (MQTT 3.1.1 §1.5.3: a UTF-8 string's length is two bytes).
+A command's op on a topic that long makes a reply topic two bytes longer (reply, cmd)."""
 
 QOS_TRAFFIC = 0  # a flood of it; each chunk is also in the traffic log
 QOS_OTHER = 1
@@ -572,6 +577,10 @@ class MqttBridge:
         except aiomqtt.MqttError as exc:
             if self._broken is not None and not self._broken.done():
                 self._broken.set_exception(exc)
+        except (TypeError, ValueError) as exc:  # refused by the library: a bug, said once
+            if repr(exc) not in self._bugs:
+                self._bugs.add(repr(exc))
+                self.log.error(f"mqtt: cannot publish on {message.topic[:100]}: {exc}")
         finally:
             window.release()
 
@@ -612,7 +621,11 @@ class MqttBridge:
         ident: object = None
         names = [s.name for s in self.services]
         if board not in names:
-            self._unknown_board(board, op, payload, names)
+            self._refuse(board, op, payload, f"no board {board!r}; boards: {', '.join(names)}")
+            return
+        topic = f"{self.config.prefix}/{board}/reply/{op}"
+        if len(topic.encode()) > MAX_TOPIC:  # an op of some 65,000 characters: no op's name
+            self._refuse(board, op, payload, f"unknown op of {len(op)} characters")
             return
         try:
             request = _arguments(payload)
@@ -629,21 +642,20 @@ class MqttBridge:
             data = _encode(reply)
         except (TypeError, ValueError) as exc:
             data = _encode({"id": None, "ok": False, "error": f"bad request: {exc}"})
-        topic = f"{self.config.prefix}/{board}/reply/{op}"
         self.outbox.put("reply", topic, lambda: data, QOS_OTHER)
 
-    def _unknown_board(self, board: str, op: str, payload: object, names: list[str]) -> None:
-        """A command for a board this daemon does not serve is not run (whatever the op), and
-        is answered on ``<prefix>/status/reply``, never on a topic made of the unknown name:
-        ``{"id": 3, "ok": false, "error": "no board 'zz'; boards: xy", "board": "zz", "op":
-        "state"}``."""
+    def _refuse(self, board: str, op: str, payload: object, error: str) -> None:
+        """A command for a board this daemon does not serve, or whose reply topic could not be
+        made (longer than MQTT allows), is not run (whatever the op), and is answered on
+        ``<prefix>/status/reply``, never on a topic made of the unknown name: ``{"id": 3,
+        "ok": false, "error": "no board 'zz'; boards: xy", "board": "zz", "op": "state"}``."""
         ident: object = None
         with contextlib.suppress(ControlError):
             ident = _arguments(payload).get("id")
         reply = {
             "id": ident,
             "ok": False,
-            "error": f"no board {board!r}; boards: {', '.join(names)}",
+            "error": error,
             "board": board,
             "op": op,
         }

@@ -641,6 +641,27 @@ async def test_a_payload_that_is_not_json_is_refused_before_it_runs(broker: int)
         assert (await run.control("state"))["axes"]["X"]["limit_positive"] is False
 
 
+async def test_an_op_too_long_for_a_reply_topic_is_answered_on_the_status_reply_topic(
+    broker: int,
+) -> None:
+    """A command topic of 65,535 bytes, MQTT's longest (3.1.1 §1.5.3), made a reply topic two
+    bytes longer (reply, cmd): no reply came, and the log said 'error: Task exception was
+    never retrieved: ValueError('Publish topic is too long.')'."""
+    async with running(broker) as run, subscribed(broker) as sub:
+        await connected(run)
+        await sub.wait("xy/state")
+        op = "o" * (65535 - len("omsd/xy/cmd/"))
+        await sub.publish(f"omsd/xy/cmd/{op}", {"id": 1})
+        reply = (await sub.wait("omsd/status/reply")).json()
+        assert reply == {
+            "id": 1,
+            "ok": False,
+            "error": f"unknown op of {len(op)} characters",
+            "board": "xy",
+            "op": op,
+        }
+
+
 async def test_a_retained_command_is_ignored(broker: int) -> None:
     async with subscribed(broker) as sub:  # left on the broker before the daemon starts
         await sub.publish(
