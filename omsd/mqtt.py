@@ -126,6 +126,9 @@ FAREWELL = 2.0
 TIMEOUT = 10.0
 """Seconds the broker has to answer a connection, a subscription or a QoS 1 publication."""
 
+UNSPECIFIED = 128
+"""The reason code paho gives a connection lost without a DISCONNECT of the broker's."""
+
 MAX_TOPIC = 65535
 """Bytes of a topic name, at most (MQTT 3.1.1 §1.5.3: a UTF-8 string's length is two bytes).
 A command's op on a topic that long makes a reply topic two bytes longer (reply, cmd)."""
@@ -347,6 +350,15 @@ def _reason(exc: BaseException) -> str:
     iteration" says less than "The connection was lost")."""
     if exc.__cause__ is not None:
         exc = exc.__cause__
+    if (
+        isinstance(exc, aiomqtt.MqttCodeError)
+        and "Unexpected disconnection" in exc.args
+        and getattr(exc.rc, "value", exc.rc) == UNSPECIFIED
+    ):
+        # MQTT 3.1.1 has no reason for a connection the broker drops (stopped, or another
+        # client connected with our client_id): paho says 'Unspecified error', which says
+        # nothing to whoever reads the log
+        return "the broker closed the connection"
     text = str(exc) or type(exc).__name__
     return text.replace("\n", " ").replace("[Errno 111] ", "")
 

@@ -276,6 +276,8 @@ async def test_the_broker_killed_and_restarted_mid_move(
         assert stopped["axes"]["X"]["position"] == 6000
     log = daemon.stderr
     assert log.count("mqtt: lost the broker") == 1, log
+    # the reason, one line a reader can act on: it was '([code:128] Unspecified error)'
+    assert "(the broker closed the connection); reconnecting" in log, log
     assert log.count("mqtt: the broker at") == 1 and "is back" in log, log
     assert "cannot reach" not in log, log
 
