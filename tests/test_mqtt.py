@@ -634,7 +634,7 @@ async def test_a_payload_that_is_not_json_is_refused_before_it_runs(broker: int)
             {
                 "id": None,
                 "ok": False,
-                "error": "payload: not a JSON object: 1e999 is beyond a double's range",
+                "error": "payload: not a JSON object: 1e999 is beyond a float's range",
             },
             {"id": None, "ok": False, "error": f"payload: {len(huge)} bytes, more than 65536"},
         ]

@@ -296,7 +296,7 @@ async def test_a_number_beyond_a_doubles_range_is_answered_and_nothing_runs(
         assert await p.next() == {
             "id": None,
             "ok": False,
-            "error": "not a JSON object: 1e999 is beyond a double's range",
+            "error": "not a JSON object: 1e999 is beyond a float's range",
         }
         state = dash.daemon.services[0].board.snapshot(dash.daemon.services[0].clock())
         assert state["axes"]["X"]["limit_positive"] is False
