@@ -38,7 +38,7 @@ from omsd.engine.gearing import followed
 from omsd.engine.queue import Op
 from omsd.engine.quiet import MOVE_TO
 from omsd.engine.ramps import kept_course
-from omsd.engine.sensing import first_look_needed
+from omsd.engine.sensing import begun_clear, first_look_needed
 from omsd.engine.states import Motion, Wait
 from omsd.engine.trajectory import Course, Trajectory
 
@@ -289,10 +289,19 @@ def _start(machine: Core, axis: Axis, tick: float, start: _Start, after_events: 
     axis.traj = Trajectory.along(tick, x, course, target)
     axis.motion = _MOVE
     axis.in_position = False
-    if not (after_events and machine.plain_sensing) or first_look_needed(axis, tick, _MOVE):
+    axis.wait = Wait("motion")
+    # its next event, found at once where it is the move's end (sensing.begun_clear, which
+    # needs no look at the sensors on its first tick either); asked before a home search is
+    # dropped, as first_look_needed is
+    plain = after_events and machine.plain_sensing
+    event = begun_clear(axis) if plain else None
+    if event is None and (not plain or first_look_needed(axis, tick, _MOVE)):
         axis.sensor_check = tick
     axis.contour_origin = None  # (gearing.moved, with no axis to follow this one)
     axis.home = None
-    axis.wait = Wait("motion")
-    axis.invalidate()
+    if event is None:
+        axis.invalidate()
+    else:
+        axis.event = event
+        machine.deadline_stale = True  # (as axis.invalidate)
     machine.talker = saved

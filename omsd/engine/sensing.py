@@ -91,6 +91,32 @@ def first_look_needed(axis: AxisState, t: float, motion: Motion) -> bool:
     return not switches_clear(axis, p, p, 0.0)
 
 
+def begun_clear(axis: AxisState) -> tuple[float, str] | None:
+    """Fast path (issue 16): :func:`next_event` of an axis that has just begun a move of a
+    kept course (``omsd.engine.follow_on``), found without the general search, where nothing
+    can come before its end: nothing else is due (no look at the sensors, interrupt, timer,
+    output, timed wait or servo loop), and the whole move stays clear of the switches
+    (:func:`switches_clear`, with :data:`SWITCH_MARGIN`), for a look that can find nothing but
+    a limit (:func:`looks_at_nothing_else`); None where that is not so (the general way).
+    Where it answers, :func:`first_look_needed` would say no look is needed: the carriage
+    stands within a step of the move's start, which is in its extent. Changes nothing."""
+    if (
+        axis.sensor_check is not None
+        or axis.in_fire is not None
+        or axis.aux_timer is not None
+        or axis.outputs
+        or axis.servo is not None
+        or (axis.wait is not None and axis.wait.until is not None)
+        or not looks_at_nothing_else(axis)
+    ):
+        return None
+    lowest, highest = axis.traj.extent()
+    off = axis.phys_offset
+    if not switches_clear(axis, lowest + off, highest + off, SWITCH_MARGIN):
+        return None
+    return axis.host.clock.at_or_after(axis.traj.end_time), "end"
+
+
 def looks_at_nothing_else(axis: AxisState) -> bool:
     """A look at the sensors (``reactions.on_sensor``) can do nothing to the axis but find a
     limit: no home search, backlash (with which the carriage is also apart from the counter by
