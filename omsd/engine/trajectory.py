@@ -45,7 +45,6 @@ class Trajectory:
     """
 
     __slots__ = (
-        "_course",
         "_extent",
         "_offsets",
         "_seen",
@@ -91,7 +90,6 @@ class Trajectory:
             final = x if math.isfinite(t) else math.nan
         self.final = final
         self._extent: tuple[float, float] | None = None
-        self._course: Course | None = None
         self._turns: bool | None = None
         self._seen = _NOT_SEEN
         # the last position counter found (omsd.engine.counter.count_at), kept as _seen is
@@ -111,17 +109,25 @@ class Trajectory:
         traj.count = None
         traj.pieces = course.pieces
         traj._starts = course.starts
+        # the same sums, in the same order, as __init__'s; and with them, the extent as extent()
+        # finds it (_bounds: a sum of floats never decreases as a term grows, so the lowest of
+        # ``base + point`` over a piece is ``base`` plus its lowest point, ``course.spans``)
         offsets: list[float] = []
-        x = x0
-        for step in course.steps:  # (the same sums, in the same order, as __init__'s)
+        x = lowest = highest = x0
+        for step, (low, high) in zip(course.steps, course.spans, strict=True):
             offsets.append(x)
+            if (y := x + low) < lowest:
+                lowest = y
+            if (y := x + high) > highest:
+                highest = y
             x += step
         traj._offsets = offsets
         traj.duration = course.duration
         traj.end_time = t0 + course.duration
         traj.final = final
-        traj._extent = None
-        traj._course = course
+        if course.pieces:  # (a course is finite: no piece without end)
+            lowest, highest = min(lowest, final), max(highest, final)
+        traj._extent = (lowest, highest)
         traj._turns = course.turns
         traj._seen = _NOT_SEEN
         traj.count_seen = _NOT_COUNTED
@@ -278,12 +284,8 @@ class Trajectory:
         at the ends of each piece and where its velocity changes sign (its turning points), the
         only places a piece's position can be extreme."""
         if self._extent is None:
-            course = self._course
             final = self.final if self.pieces and self.is_finite else None
-            if course is None:
-                lowest, highest = _bounds(self.x0, self._offsets, self._points(), final)
-            else:
-                lowest, highest = _spans(self.x0, self._offsets, course.spans, final)
+            lowest, highest = _bounds(self.x0, self._offsets, self._points(), final)
             for piece in self.pieces:  # a cruise without end (first_time's own rule)
                 if math.isinf(piece.duration):
                     v = piece.v(0.0)
@@ -348,25 +350,6 @@ def _bounds(
     return lowest, highest
 
 
-def _spans(
-    x0: float, offsets: list[float], spans: list[tuple[float, float]], final: float | None
-) -> tuple[float, float]:
-    """What :func:`_bounds` finds, from each piece's lowest and highest point (``spans``):
-    the same numbers, to the last bit (a sum of floats never decreases as a term grows, so the
-    lowest of ``base + point`` is ``base`` plus the lowest point)."""
-    lowest = highest = x0
-    for base, (low, high) in zip(offsets, spans, strict=True):
-        x = base + low
-        if x < lowest:
-            lowest = x
-        x = base + high
-        if x > highest:
-            highest = x
-    if final is not None:
-        lowest, highest = min(lowest, final), max(highest, final)
-    return lowest, highest
-
-
 class Course:
     """A finite motion's pieces and what a :class:`Trajectory` works out from them that does
     not depend on where or when the motion starts: when each piece starts, how far each takes
@@ -395,7 +378,7 @@ class Course:
         self.starts = starts
         self.steps = steps
         self.extremes = extremes
-        self.spans = [(min(xs), max(xs)) for xs in extremes]  # (Trajectory.extent, _spans)
+        self.spans = [(min(xs), max(xs)) for xs in extremes]  # (Trajectory.extent, along)
         self.turns = _turns(self.pieces)  # (Trajectory.turns)
         self.duration = t
 
