@@ -128,12 +128,16 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
     mover the sender (:func:`_start`): so every axis stays as it was looked at, every settle
     after an instant would step no axis and read nothing (its pump, made once at the end, names
     the sender the talker), and what it says of the machine (``Core.unsettle``) is said once,
-    at the end, for all. ``tests/board/test_fast_paths.py`` runs it against the board without
-    fast paths."""
+    at the end, for all. So is the machine's next deadline, found from what was looked at (the
+    due axes' own next events, the earliest of the others'), not by looking at every axis
+    again; and the wake-up is kept where only quiet axes moved (:func:`_wakeup_kept`).
+    ``tests/board/test_fast_paths.py`` and ``tests/board/test_quiet_deadlines.py`` run it
+    against the board without fast paths."""
     machine = ex.machine
     if machine.init_until is not None or not machine.front.holds_nothing():
         return
     due: list[Axis] = []
+    others = math.inf  # the earliest next event of the axes not due
     for axis in machine.axes:
         if axis.gear is not None:
             return  # (no axis is geared: none follows another's move, _next_move need not ask)
@@ -145,8 +149,13 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
             return
         event = axis.event  # (read without a call where it is known, as Machine._next_internal)
         when = axis.next_event_time() if event is None else event[0]
-        if when is not None and when <= now:
+        if when is None:
+            continue
+        if when <= now:
             due.append(axis)
+        elif when < others:
+            others = when
+    looked = due.copy()
     last: float | None = None
     while due:
         t = min(axis.event[0] for axis in due if axis.event is not None)
@@ -174,9 +183,36 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         break  # (an instant with more than follow-ons: the straightforward way's)
     if last is not None:
         machine.talker = 0  # (Machine._handle_due, after the follow-ons)
+        kept = _wakeup_kept(ex, looked)
         machine.unsettle(outside=False)  # (the settle after an instant's events)
+        # the machine's next deadline, as Machine._next_internal would find it: the axes not
+        # due are as they were looked at, and each due one has its own next event
+        for axis in looked:
+            if axis.event is not None and axis.event[0] < others:
+                others = axis.event[0]
+        machine.deadline = None if others == math.inf else others
+        machine.deadline_stale = False
+        machine.wakeup_stale = not kept
         machine.front.pump(last)
         machine.settled = True
+
+
+def _wakeup_kept(ex: Executor, axes: list[Axis]) -> bool:
+    """The board's wake-up (``Machine.next_wakeup``), found before the follow-ons of ``axes``,
+    is the same after them: it was found (not stale) by ``Machine._find_wakeup``'s search of
+    the axes that are not quiet (no sensor hook, no contour; no INIT and no gearing, which
+    :func:`follow_on_until` has looked at), and each of ``axes`` was found quiet then and in
+    this epoch (``AxisState.quiet_known``), so the search passed it by, as it would again; the
+    follow-ons change nothing else it looks at."""
+    machine = ex.machine
+    if machine.wakeup_stale or ex.sensor_hooks or machine.contour is not None:
+        return False
+    epoch = machine.outside_epoch
+    for axis in axes:
+        known = axis.quiet_known
+        if known is None or known[0] != epoch or not known[1]:
+            return False
+    return True
 
 
 def _ending(
