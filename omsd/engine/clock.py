@@ -38,8 +38,10 @@ class SampleClock:
         return self.origin + index / self.rate
 
     def at_or_after(self, t: float) -> float:
-        """The first tick at or after ``t``."""
-        return self.time_of(self.index_at_or_after(t))
+        """The first tick at or after ``t``: ``time_of(index_at_or_after(t))``, written out (it
+        is asked for every event an axis has; the same arithmetic, the same bits)."""
+        origin = self.origin
+        return origin + math.ceil((t - origin) * self.rate - _EPS) / self.rate
 
     def after(self, t: float) -> float:
         """The first tick strictly after ``t``."""
