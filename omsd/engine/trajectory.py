@@ -113,15 +113,24 @@ class Trajectory:
         # finds it (_bounds: a sum of floats never decreases as a term grows, so the lowest of
         # ``base + point`` over a piece is ``base`` plus its lowest point, ``course.spans``)
         offsets: list[float] = []
-        x = lowest = highest = x0
-        for step, (low, high) in zip(course.steps, course.spans, strict=True):
+        x = x0
+        for step in course.steps:
             offsets.append(x)
-            if (y := x + low) < lowest:
-                lowest = y
-            if (y := x + high) > highest:
-                highest = y
             x += step
         traj._offsets = offsets
+        # a course one way (Course.way): each piece's lowest and highest points are its ends,
+        # so the extent is where it begins and where it ends (the sums are monotonic)
+        if course.way > 0.0:
+            lowest, highest = x0, (x if x > x0 else x0)
+        elif course.way < 0.0:
+            lowest, highest = (x if x < x0 else x0), x0
+        else:
+            lowest = highest = x0
+            for base, (low, high) in zip(offsets, course.spans, strict=True):
+                if (y := base + low) < lowest:
+                    lowest = y
+                if (y := base + high) > highest:
+                    highest = y
         traj.duration = course.duration
         traj.end_time = t0 + course.duration
         traj.final = final
@@ -360,7 +369,7 @@ class Course:
     are those ``Trajectory`` computes, in the same order: the same results to the last bit
     (``tests/board/test_fast_paths.py``)."""
 
-    __slots__ = ("duration", "extremes", "pieces", "spans", "starts", "steps", "turns")
+    __slots__ = ("duration", "extremes", "pieces", "spans", "starts", "steps", "turns", "way")
 
     def __init__(self, pieces: Sequence[Piece]) -> None:
         self.pieces = tuple(p for p in pieces if p.duration > 0.0)
@@ -381,6 +390,15 @@ class Course:
         self.spans = [(min(xs), max(xs)) for xs in extremes]  # (Trajectory.extent, along)
         self.turns = _turns(self.pieces)  # (Trajectory.turns)
         self.duration = t
+        # 1.0: every piece goes up from its start to its end, which are its lowest and highest
+        # points (spans); -1.0: every one down; 0.0: neither (Trajectory.along)
+        ends = list(zip(steps, self.spans, strict=True))
+        if all(step >= 0.0 and low == 0.0 and high == step for step, (low, high) in ends):
+            self.way = 1.0
+        elif all(step <= 0.0 and high == 0.0 and low == step for step, (low, high) in ends):
+            self.way = -1.0
+        else:
+            self.way = 0.0
 
 
 def segment(traj: Trajectory, a: float, b: float) -> list[Piece]:
