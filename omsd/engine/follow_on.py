@@ -69,7 +69,7 @@ def follow_on(machine: Core, axis: Axis, codes: Collection[str], t: float) -> bo
 
 def ends_that_follow_on(ex: Executor, codes: Collection[str], t: float) -> bool:
     """At ``t``, in ``Machine.advance``, before the reactions to what is due: if everything due
-    is the end of a move (:func:`_ends_plainly`) on an axis whose queue then follows on with the
+    is the plain end of a move (:func:`_ending`) on an axis whose queue then follows on with the
     next (:func:`follow_on`'s conditions), end each and start its next move, leaving every axis
     as ``reactions.on_end`` and then the settle's :func:`follow_on` leave it, and return True;
     otherwise change nothing and return False.
@@ -145,8 +145,12 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         if wait is None:
             if axis.queue.pc < len(axis.queue.program):
                 return  # (a step would run its queue)
-        elif wait.kind != "motion" or axis.motion is _IDLE or not _moves_for_sender(axis):
+        elif wait.kind != "motion" or axis.motion is _IDLE:
             return
+        else:  # passed by in a settle: its mover is the waiting command's sender
+            queue = axis.queue
+            if queue.pc >= len(queue.program) or queue.program[queue.pc].source != axis.source:
+                return
         event = axis.event  # (read without a call where it is known, as Machine._next_internal)
         when = axis.next_event_time() if event is None else event[0]
         if when is None:
@@ -158,7 +162,10 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
     looked = due.copy()
     last: float | None = None
     while due:
-        t = min(axis.event[0] for axis in due if axis.event is not None)
+        t = math.inf  # the earliest of the due axes' events
+        for axis in due:
+            if axis.event is not None and axis.event[0] < t:
+                t = axis.event[0]
         tick = machine.clock.at_or_after(t)
         if tick > max(machine.now, t):
             break  # (_next_move's own condition: a start after now)
@@ -218,11 +225,25 @@ def _wakeup_kept(ex: Executor, axes: list[Axis]) -> bool:
 def _ending(
     machine: Core, axis: Axis, codes: Collection[str], t: float, tick: float, gears: bool = True
 ) -> tuple[Axis, float, _Start] | None:
-    """What is due for ``axis`` at ``t`` is the plain end of a move (:func:`_ends_plainly`)
-    and its queue follows on with the next (:func:`_next_move`, from where the end leaves it,
-    on a whole step as ``Axis.settle`` counts it): the axis, that place and the move; None if
-    not. Changes nothing."""
-    if not _ends_plainly(axis, t):
+    """What is due for ``axis`` at ``t`` is the plain end of a move and its queue follows on
+    with the next (:func:`_next_move`, from where the end leaves it, on a whole step as
+    ``Axis.settle`` counts it): the axis, that place and the move; None if not. Changes nothing.
+
+    A plain end: ``reactions.on_end`` would leave the axis at rest with nothing more due at
+    ``t`` and nothing to do but note where it is: no hold (``Executor.check_hold``), no look at
+    the sensors, no armed interrupt, no timer and no scheduled output (no aux output or servo
+    loop either: :func:`_next_move` asks)."""
+    event = axis.event
+    if (
+        event is None
+        or event[1] != "end"
+        or axis.motion is not _MOVE
+        or axis.hold
+        or axis.sensor_check is not None
+        or axis.in_fire is not None
+        or axis.aux_timer is not None
+        or axis.outputs
+    ):
         return None
     traj = axis.traj
     x = float(counted(traj, traj.position(t), t))
@@ -238,30 +259,6 @@ def _start_all(machine: Core, starts: list[tuple[Axis, float, _Start]], tick: fl
     for axis, x, start in starts:
         axis.hold_goal = axis.tracked_encoder(x)  # (on_end)
         _start(machine, axis, tick, start, True)
-
-
-def _moves_for_sender(axis: Axis) -> bool:
-    """``axis``, waiting for its motion, is passed by in a settle: its mover is the waiting
-    command's sender (``Machine.settle``)."""
-    q = axis.queue
-    return q.pc < len(q.program) and q.program[q.pc].source == axis.source
-
-
-def _ends_plainly(axis: Axis, t: float) -> bool:
-    """What is due for ``axis`` at ``t`` is the end of a move, and ``reactions.on_end`` would
-    leave it at rest with nothing more due at ``t`` and nothing to do but note where it is: no
-    hold (``Executor.check_hold``), no look at the sensors, no armed interrupt, no timer and no
-    scheduled output (no aux output or servo loop either: :func:`_next_move` asks)."""
-    return (
-        axis.event is not None
-        and axis.event[1] == "end"
-        and axis.motion is _MOVE
-        and not axis.hold
-        and axis.sensor_check is None
-        and axis.in_fire is None
-        and axis.aux_timer is None
-        and not axis.outputs
-    )
 
 
 #: What :func:`_next_move` finds: the ``GO`` that starts the move, where it starts, its target,
