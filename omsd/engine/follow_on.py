@@ -164,8 +164,9 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
     while due:
         t = math.inf  # the earliest of the due axes' events
         for axis in due:
-            if axis.event is not None and axis.event[0] < t:
-                t = axis.event[0]
+            event = axis.event
+            if event is not None and event[0] < t:
+                t = event[0]
         tick = machine.clock.at_or_after(t)
         if tick > max(machine.now, t):
             break  # (_next_move's own condition: a start after now)
@@ -182,7 +183,8 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         else:
             _start_all(machine, starts, tick)
             for axis, _, _ in starts:
-                when = axis.next_event_time()
+                event = axis.event  # (read without a call where _start found it)
+                when = axis.next_event_time() if event is None else event[0]
                 if when is None or when > now:
                     due.remove(axis)
             last = t
@@ -195,8 +197,9 @@ def follow_on_until(ex: Executor, codes: Collection[str], now: float) -> None:
         # the machine's next deadline, as Machine._next_internal would find it: the axes not
         # due are as they were looked at, and each due one has its own next event
         for axis in looked:
-            if axis.event is not None and axis.event[0] < others:
-                others = axis.event[0]
+            event = axis.event
+            if event is not None and event[0] < others:
+                others = event[0]
         machine.deadline = None if others == math.inf else others
         machine.deadline_stale = False
         machine.wakeup_stale = not kept
