@@ -120,3 +120,7 @@ class WorldState:
     def force_limit(self, axis: int, direction: int, state: bool | None) -> None:
         pair = self.forced_limits.setdefault(axis, [None, None])
         pair[1 if direction > 0 else 0] = state
+        if pair[0] is None and pair[1] is None:
+            # both follow the carriage again: no switch of the axis is forced (a status then
+            # reads the switches on its fast path, omsd.engine.axis_status)
+            del self.forced_limits[axis]

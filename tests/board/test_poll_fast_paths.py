@@ -15,6 +15,7 @@ from twin import Twin
 
 from omsd.board import Board
 from omsd.board.world import AxisWorld
+from omsd.engine.axis_state import AxisState
 from omsd.engine.axis_status import status_inputs
 from omsd.engine.counter import count_at, counted
 from omsd.engine.pieces import cruise
@@ -113,3 +114,33 @@ def test_runs_of_reports_polled_again_and_again_say_the_same(model: str) -> None
         if rng.random() < 0.2:
             twin.advance(now)
     assert any(twin.fast._plans.values())  # (the plans were run, not only made)
+
+
+def test_a_limit_forced_and_let_go_leaves_the_status_on_its_fast_path(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A limit switch forced (the control socket's ``limit``, the dashboard) and let go again
+    (``None``: "let the carriage position decide again") leaves no switch forced: the status
+    reads the switches on its fast path again, as it did before (it kept an entry of two
+    ``None`` for the axis, and every status of the board went the straightforward way from
+    then on), and says the same."""
+    board = Board(get_model("PC48-4"), world={"X": WORLDS[0]})
+    board.receive(b"AX;VL400;AC4000;JG400;", 0.0)
+    board.set_limit("X", 1, True, 0.01)
+    board.set_limit("X", -1, False, 0.02)
+    board.set_limit("X", 1, None, 0.03)
+    board.set_limit("X", -1, None, 0.04)
+    assert not board.world.forced_limits
+    axis = board.axes[0]
+    board.advance(0.05)
+    expected = (
+        axis.heading(0.05),
+        axis.limit_active(axis.heading(0.05), 0.05),
+        axis.home_sensed(0.05),
+    )
+
+    def straightforward(*_: object) -> None:
+        raise AssertionError("the status read the axis the straightforward way")
+
+    monkeypatch.setattr(AxisState, "carriage", straightforward)
+    assert status_inputs(axis, 0.05) == expected
