@@ -144,3 +144,68 @@ def test_a_limit_forced_and_let_go_leaves_the_status_on_its_fast_path(
 
     monkeypatch.setattr(AxisState, "carriage", straightforward)
     assert status_inputs(axis, 0.05) == expected
+
+
+#: Polls and what is done between them, for the fast paths' own edges (the status's plain
+#: world, a kept plan's mode and axis, the kept count of one instant).
+EDGES = [
+    # forced switches set and let go between polls, on a jog through home and onto a limit
+    (
+        "PC48-4",
+        [
+            "AX;VL400;AC4000;JG400;",
+            ("limit", "X", 1, True),
+            ("home", "X", True),
+            ("limit", "X", 1, None),
+            ("home", "X", None),
+            ("stall", "X", True),
+            ("stall", "X", False),
+        ],
+    ),
+    # soft travel limits on and off, on an encoder axis with a ratio and user units
+    (
+        "PC48-4E",
+        [
+            "AX;ER1000,2000;UU0.5;VL400;AC4000;TL10,-10;MR40;GO;",
+            "TL0,0;",
+            "LP601;",
+            "HM601;",
+            "MA601;GO;",
+        ],
+    ),
+    # a servo axis homing and loaded at one instant (a new trajectory where a count was kept)
+    ("PCIX-202", ["AX;VL2000;AC20000;JG1000;", "LP7;", "HM5;", "AY;HR-3;", "AX;LP0;"]),
+    # a plan made in one mode, the mode changed by a command not in it; RA in the plan
+    ("PC48-4", ["AX;MR5;GO;", "AA;", "AY;MR-5;GO;", "AM;", "AX;"]),
+    # a selection that fails (AZ on a two-axis board), echo on and off, a contour defined
+    ("PC48-2", ["AX;MR5;GO;", "EN;", "EF;", "AA;CD100,0;", "CE;", "AX;"]),
+    # AA meeting points in loops, the PCIx's groups
+    ("PC48-4", ["AA;LS3;MR5,5,5,5;GO;WD;LE;", "AA;WH;MR2,2,2,2;GO;WG;", "AX;"]),
+    ("PCIX-400", ["AA;LS3;MR5,5,5,5;GO;WD;LE;", "AA;WS0.05;MR1,1,1,1;GO;WD;", "AX;"]),
+]
+POLLS = [b"AX QA RP;", b"AZ QA RP;", b"QA RA QA;", b"AY;RA;RP;RE;", b"AM QA RP", b"QA"]
+
+
+@pytest.mark.parametrize(("model", "steps"), EDGES)
+def test_polls_around_the_fast_paths_edges_say_the_same(model: str, steps: list[object]) -> None:
+    """Each step (a command string or a change of the world) followed by polls every few
+    milliseconds, among the switches and the ends of the motions: the board with its fast
+    paths says what the straightforward one says."""
+    twin = Twin(get_model(model), world={"X": WORLDS[0], "Y": WORLDS[1]})
+    now = 0.0
+    for step in steps:
+        if isinstance(step, str):
+            twin.receive(step.encode(), now)
+        else:
+            what, *args = step  # type: ignore[misc]
+            if what == "limit":
+                twin.set_limit(*args, now)
+            elif what == "home":
+                twin.set_home(*args, now)
+            else:
+                twin.set_stall(*args, now)
+        for k in range(12):
+            twin.receive(POLLS[k % len(POLLS)], now)
+            twin.take_output_sourced()
+            now += 0.0 if k % 5 == 0 else 0.004
+        twin.advance(now)
