@@ -166,6 +166,10 @@ class Trajectory:
         if seen[0] == t:
             return seen[1]
         i, tau = self._locate(t)
+        if i < 0:
+            # past its last piece, though before end_time: t - t0 rounded to duration or more,
+            # where t0 + duration rounded up (the last piece's start is no answer here)
+            return self.final
         x = self._offsets[i] + self.pieces[i].x(tau)
         self._seen = (t, x)
         return x

@@ -6,6 +6,7 @@ board says."""
 
 from __future__ import annotations
 
+import math
 import random
 
 import pytest
@@ -209,3 +210,26 @@ def test_polls_around_the_fast_paths_edges_say_the_same(model: str, steps: list[
             twin.take_output_sourced()
             now += 0.0 if k % 5 == 0 else 0.004
         twin.advance(now)
+
+
+def test_a_move_in_its_last_instant_is_where_it_ends_not_where_its_last_piece_began() -> None:
+    """A trajectory asked about an instant before ``end_time`` (``t0 + duration``, rounded)
+    that is ``duration`` or more after ``t0`` (``t - t0``, rounded) is at its end, not at the
+    start of its last piece: ``_locate`` finds no piece there. ``AX VL5000 AC50000`` and
+    ``MR1000 GO`` at 0.17 s, ``RP`` at 0.47041015625 s (the move ends a bit later, at
+    0.47041015625000004) answered 750, the point where the ramp down began; RP "returns the
+    current position ... even if the axis is in motion" (PC48 §6.13): 1000. The status poll's
+    ``position_velocity`` reads it as ``position`` does."""
+    t0, duration = 1.2168333089732086, 4.776289942088841
+    traj = Trajectory(t0, 0.0, [cruise(1000.0, duration)])
+    t = math.nextafter(traj.end_time, 0.0)
+    assert t - t0 >= duration  # (the instant this is about)
+    assert traj.position(t) == traj.final
+    assert traj.position_velocity(t) == (traj.final, 0.0)
+    twin = Twin(get_model("PC48-4"))
+    twin.receive(b"AX;VL5000;AC50000;", 0.0)
+    twin.receive(b"MR1000;GO;", 0.17)
+    end = twin.axes[0].traj.end_time
+    twin.take_output()
+    twin.receive(b"RP;", math.nextafter(end, 0.0))
+    assert [reply.text for reply in twin.take_output()] == [b"1000"]
