@@ -517,19 +517,54 @@ def _open(name: str) -> io.TextIOWrapper:
     except BaseException:
         os.close(fd)
         raise
-    return _text(open(fd, "rb"), name)
+    return _text(open(fd, "rb", buffering=0), name)
 
 
-def _text(raw: io.BufferedReader, name: str) -> io.TextIOWrapper:
-    """``raw`` read as text, through gzip when it begins as a gzip file does."""
+def _text(raw: io.FileIO, name: str) -> io.TextIOWrapper:
+    """``raw`` read as text, through gzip when it begins as a gzip file does. The first bytes
+    are read in as many reads as they come in: a pipe gives what its writer has written so far,
+    and one byte of the magic was taken for no gzip (a buffer's ``peek`` reads once)."""
+    head = b""
     try:
-        compressed = raw.peek(len(_GZIP))[: len(_GZIP)] == _GZIP
+        while len(head) < len(_GZIP) and _GZIP.startswith(head):
+            more = raw.read(len(_GZIP) - len(head))
+            if not more:
+                break
+            head += more
     except OSError as exc:
         raw.close()
         raise RecordingError(f"cannot read {name}: {exc.strerror or exc}") from None
-    if compressed:
-        return io.TextIOWrapper(gzip.GzipFile(fileobj=raw, mode="rb"), "utf-8", "replace")
-    return io.TextIOWrapper(raw, encoding="utf-8", errors="replace")
+    stream = io.BufferedReader(_Prefixed(head, raw))
+    if head == _GZIP:
+        return io.TextIOWrapper(gzip.GzipFile(fileobj=stream, mode="rb"), "utf-8", "replace")
+    return io.TextIOWrapper(stream, encoding="utf-8", errors="replace")
+
+
+class _Prefixed(io.RawIOBase):
+    """``raw`` with the bytes already read from it (``head``) given back first."""
+
+    def __init__(self, head: bytes, raw: io.FileIO) -> None:
+        super().__init__()
+        self._head = head
+        self._raw = raw
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        head = self._head
+        if not head:
+            return self._raw.readinto(buffer) or 0
+        n = min(len(buffer), len(head))
+        buffer[:n] = head[:n]
+        self._head = head[n:]
+        return n
+
+    def close(self) -> None:
+        try:
+            self._raw.close()
+        finally:
+            super().close()
 
 
 _GZIP = b"\x1f\x8b"

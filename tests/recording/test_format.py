@@ -350,3 +350,36 @@ def test_a_compressed_log_is_read_as_it_is(tmp_path: Path) -> None:
     with pytest.raises(RecordingError, match=r"^cannot read .*session.jsonl.gz: ") as caught:
         read_recording(packed)
     assert "\n" not in str(caught.value)
+
+
+def test_a_compressed_pipe_whose_first_read_is_one_byte_is_read_as_gzip(tmp_path: Path) -> None:
+    # a pipe gives what its writer has written so far: the magic's first byte alone (a writer
+    # that flushes as it goes, a slow ssh) was taken for no gzip and the whole file read as text,
+    # 'not a JSON object'. The magic is read in as many reads as it comes in.
+    import gzip
+    import time
+
+    path = tmp_path / "session.jsonl"
+    write(path)
+    expected = read_recording(path)
+    packed = gzip.compress(path.read_bytes())
+    r, w = os.pipe()
+
+    def trickle() -> None:
+        os.write(w, packed[:1])
+        time.sleep(0.3)
+        os.write(w, packed[1:])
+        os.close(w)
+
+    writer = threading.Thread(target=trickle)
+    writer.start()
+    try:
+        assert read_recording(f"/dev/fd/{r}").chunks == expected.chunks
+    finally:
+        writer.join()
+        os.close(r)
+    # a file of one byte, that byte the magic's first: read as text (blank), not a gzip error
+    one = tmp_path / "one.jsonl"
+    one.write_bytes(b"\x1f")
+    with pytest.raises(RecordingError, match=r"one.jsonl: no traffic in the file"):
+        read_recording(one)
