@@ -198,16 +198,24 @@ def shared_path(
     removed with it at the stop), or ``None``. Pty links among themselves are the
     configuration's to refuse (two boards' endpoints)."""
     same = "give each a path of its own"
-    where = {os.path.abspath(link): board for board, link in ptys}
-    if control is not None and (board := where.get(os.path.abspath(control))) is not None:
+    where = {_place(link): board for board, link in ptys}
+    if control is not None and (board := where.get(_place(control))) is not None:
         return f"{board}: pty link {control} is the control socket's path too: {same}"
     if state is None:
         return None
-    if control is not None and os.path.abspath(state) == os.path.abspath(control):
+    if control is not None and _place(state) == _place(control):
         return f"state file {state} is the control socket's path too: {same}"
-    if (board := where.get(os.path.abspath(state))) is not None:
+    if (board := where.get(_place(state))) is not None:
         return f"state file {state} is {board}'s pty link too: {same}"
     return None
+
+
+def _place(path: Path) -> str:
+    """The directory entry ``path`` names: its directory's real path (symlinks and ``..``
+    followed, so ``alias/x`` and ``dir/x`` with ``alias`` a link to ``dir`` are one) and its
+    name. The name itself is not followed: a pty link is a symlink, to its device."""
+    directory, name = os.path.split(os.fspath(path))
+    return os.path.join(os.path.realpath(directory or "."), name)
 
 
 def missing_directory(directory: Path) -> str | None:

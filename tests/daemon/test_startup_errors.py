@@ -286,3 +286,21 @@ def test_one_path_for_two_things_is_refused(
     line = failed(run_omsd(*args, cwd=tmp_path, timeout=10))
     assert line == expected.format(same=same)
     assert not os.path.lexists(same)
+
+
+@pytest.mark.parametrize("spelling", ["relative", "through a symlinked directory"])
+def test_one_path_spelt_two_ways_is_refused(tmp_path: Path, _runtime: Path, spelling: str) -> None:
+    """The state file and the control socket at one place, named two ways: ``--state same``
+    (relative) or ``--state alias/same`` (``alias`` a symlink to the directory) with
+    ``--control DIR/same``. Through the symlink the daemon served: the socket was there, the
+    stop's save replaced it and the socket's removal took the flash with it."""
+    same, port = tmp_path / "same", free_port()
+    (tmp_path / "alias").symlink_to(tmp_path)
+    state = "same" if spelling == "relative" else str(tmp_path / "alias" / "same")
+    args = ["--tcp", f"127.0.0.1:{port}", "--state", state, "--control", str(same)]
+    line = failed(run_omsd(*args, cwd=tmp_path, timeout=10))
+    named = same if spelling == "relative" else state  # a relative path is said absolute
+    assert line == (
+        f"omsd: state file {named} is the control socket's path too: give each a path of its own"
+    )
+    assert not os.path.lexists(same)
