@@ -586,9 +586,15 @@ class ControlServer:
 
 def _number(m: dict[str, Any], key: str) -> float:
     value = m.get(key)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise ControlError(f"{key}: expected a number, got {value!r}")
-    return float(value)
+    try:
+        number = float(value)  # JSON's integers are read whole: 1 and 400 zeros is one
+    except OverflowError:
+        number = math.inf
+    if not math.isfinite(number):
+        raise ControlError(f"{key}: expected a number, got one beyond a float's range")
+    return number
 
 
 def _counter(m: dict[str, Any], key: str) -> float:

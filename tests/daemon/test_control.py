@@ -921,6 +921,14 @@ def test_bad_requests_get_one_line_errors_and_the_connection_stays(
             # waited for ever ("ValueError: Out of range float values are not JSON compliant")
             (b'{"id":1e999,"op":"boards"}\n', None, "1e999"),
             (b'{"id":15,"op":"wait","until":"idle","timeout":-1e400}\n', None, "-1e400"),
+            # an integer beyond a float's range is JSON, and read whole: float() of it raised
+            # OverflowError in the op, and the request was never answered either
+            (b'{"id":16,"op":"slip","axis":"X","steps":1' + b"0" * 400 + b"}\n", 16, "steps"),
+            (
+                b'{"id":17,"op":"wait","until":"idle","timeout":-1' + b"0" * 400 + b"}\n",
+                17,
+                "timeout",
+            ),
             # JSON's true is no number: it drove input 1 and closed X's positive limit
             (b'{"id":11,"op":"input","bit":true,"high":false}\n', 11, "bit"),
             (
