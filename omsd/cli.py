@@ -619,6 +619,14 @@ def _start_and_serve(args: argparse.Namespace) -> int:
         print(f"omsd: {exc}", file=sys.stderr)
         return 2
     log_file = args.log if args.log is not None else config.log.file
+    if log_file is not None:
+        from omsd.files import log_shared_path
+
+        ptys = [(b.name, p.link) for b in config.boards for p in b.pty]
+        problem = log_shared_path(log_file, ptys, config.control.socket, config.state)
+        if problem is not None:
+            print(f"omsd: {problem}", file=sys.stderr)
+            return 2
     view = args.view or config.log.view
     try:
         log = TrafficLog(view=view, file=log_file, group=config.log.group)

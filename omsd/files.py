@@ -20,7 +20,8 @@ by :meth:`omsd.daemon.Daemon.start`), it refuses, with one line and exit status 
   (``/dev/pts/N``; ``/dev/ttysNNN`` on macOS and the BSDs) left by a daemon that died: a
   regular file, a directory, a socket, a symlink anywhere else (:func:`pty_link_refusal`);
 * anything at the control socket's path that is not a socket (:func:`socket_refusal`);
-* a pty link, the control socket and the state file at one path (:func:`shared_path`).
+* a pty link, the control socket and the state file at one path (:func:`shared_path`), or the
+  traffic log at one of theirs (:func:`log_shared_path`).
 
 Nor does it start where it cannot work (:meth:`omsd.daemon.Daemon.start`, also exit status 2,
 issue 14): a pty link outside the runtime directory whose directory is missing
@@ -210,6 +211,25 @@ def shared_path(
     return None
 
 
+def log_shared_path(
+    log: Path, ptys: Iterable[tuple[str, Path]], control: Path | None, state: Path | None
+) -> str | None:
+    """Why the traffic log cannot be at ``log``: it is a pty link's path, the control socket's
+    or the state file's (the state file read the log as a corrupt flash and its first save
+    renamed the log away; the socket or the link refused the file the log had just made), or
+    ``None``. Asked before the log is opened (created)."""
+    same = "give each a path of its own"
+    place = _place(log)
+    if state is not None and _place(state) == place:
+        return f"traffic log {log} is the state file's path too: {same}"
+    if control is not None and _place(control) == place:
+        return f"traffic log {log} is the control socket's path too: {same}"
+    for board, link in ptys:
+        if _place(link) == place:
+            return f"traffic log {log} is {board}'s pty link too: {same}"
+    return None
+
+
 def _place(path: Path) -> str:
     """The directory entry ``path`` names: its directory's real path (symlinks and ``..``
     followed, so ``alias/x`` and ``dir/x`` with ``alias`` a link to ``dir`` are one) and its
@@ -307,6 +327,7 @@ __all__ = [
     "file_mode",
     "group_id",
     "is_pty_device",
+    "log_shared_path",
     "missing_directory",
     "open_log",
     "preflight",

@@ -304,3 +304,26 @@ def test_one_path_spelt_two_ways_is_refused(tmp_path: Path, _runtime: Path, spel
         f"omsd: state file {named} is the control socket's path too: give each a path of its own"
     )
     assert not os.path.lexists(same)
+
+
+@pytest.mark.parametrize(
+    ("other", "expected"),
+    [
+        ("--state", "the state file's path too"),
+        ("--control", "the control socket's path too"),
+        ("--pty", "board1's pty link too"),
+    ],
+)
+def test_the_traffic_log_at_another_thing_s_path_is_refused(
+    tmp_path: Path, _runtime: Path, other: str, expected: str
+) -> None:
+    """``--log X --state X``: the daemon served, the log written where the flash is kept; the
+    state file read the log as a corrupt flash, and the first save (AP) renamed the log away to
+    X.corrupt. ``--log X --control X`` made the log, then refused "a regular file, not a
+    socket ... remove it": the file it had made itself. Refused, as the pty link, the control
+    socket and the state file at one path are, before the log is opened (nothing made)."""
+    same, port = tmp_path / "same", free_port()
+    args = ["--tcp", f"127.0.0.1:{port}", "--log", str(same), other, str(same)]
+    line = failed(run_omsd(*args, cwd=tmp_path, timeout=10))
+    assert line == f"omsd: traffic log {same} is {expected}: give each a path of its own"
+    assert not os.path.lexists(same)
