@@ -14,7 +14,9 @@ with ``pacing`` on, paces the board's output at the line the client set
 (:class:`omsd.pacing.Pacer`). The modem lines it reports are those of a card that is there and
 ready: CTS, DSR and CD on, RI off. The board's bytes are escaped on the way out (an IAC, 0xFF,
 doubled), so any byte passes both ways. While the client has suspended the flow
-(FLOWCONTROL-SUSPEND) what goes to it is held until it resumes.
+(FLOWCONTROL-SUSPEND) what goes to it is held until it resumes. Telnet answers, like the
+board's output, are dropped once :data:`omsd.transport.tcp.MAX_PENDING_OUTPUT` bytes wait
+unsent (a client that asks and never reads).
 
 Otherwise it is a TCP endpoint (:class:`omsd.transport.tcp.TcpClient`): one client at a time,
 shared with the board's plain TCP endpoints (``second_client``), each connection a session of
@@ -300,8 +302,18 @@ class Rfc2217Client(TcpClient):
         held = self._held
         if held is None:
             transport = self.transport
-            if transport is not None and not transport.is_closing():
-                transport.write(data)
+            if transport is None or transport.is_closing():
+                return
+            if transport.get_write_buffer_size() > MAX_PENDING_OUTPUT:
+                # a client that asks (every query is answered) and never reads: its answers
+                # are dropped as the board's output is, not buffered without end
+                if not self._dropping:
+                    self._dropping = True
+                    self.service.log.warning(
+                        f"{self.service.name}: {self.label} is not reading; dropping output"
+                    )
+                return
+            transport.write(data)
         elif len(held) + len(data) <= MAX_PENDING_OUTPUT:
             held += data
         elif not self._held_dropping:

@@ -441,6 +441,37 @@ async def test_flowcontrol_suspend_holds_the_board_s_output_until_resume() -> No
         service.close()
 
 
+async def test_telnet_answers_to_a_client_that_never_reads_are_bounded() -> None:
+    """Every query is answered (SIGNATURE's request, 6 bytes, with some 20), and the answers went
+    to the socket whatever it held: a client that sent queries and never read them had the
+    daemon's memory grow without end (70 MB in 8 s). Past MAX_PENDING_OUTPUT unsent, they are
+    dropped, as the board's output is (omsd.transport.tcp: "is not reading; dropping output")."""
+    from omsd.transport.tcp import MAX_PENDING_OUTPUT
+
+    service, log, _ = make_service()
+    server, _, port = await serve_rfc2217(service, "127.0.0.1", 0, "takeover")
+    signature = IAC_SB_COM + b"\x00" + IAC_SE
+    sock = socket.socket()
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    sock.setblocking(False)
+    try:
+        await asyncio.get_running_loop().sock_connect(sock, ("127.0.0.1", port))
+        await until(lambda: bool(service.clients))
+        client = service.clients[0]
+        burst = signature * 20_000
+        for _ in range(40):  # 4.8 MB of queries, some 16 MB of answers
+            await asyncio.get_running_loop().sock_sendall(sock, burst)
+        await until(lambda: "dropping output" in log.getvalue())
+        await asyncio.sleep(0.2)
+        transport = client.transport
+        assert transport is not None
+        assert transport.get_write_buffer_size() <= MAX_PENDING_OUTPUT + 4096
+    finally:
+        sock.close()
+        server.close()
+        service.close()
+
+
 @pytest.mark.parametrize("baud", [1, 49, 10_000_001, 0xFFFFFFFF])
 async def test_a_baud_rate_no_line_runs_at_is_refused_with_the_current_one(baud: int) -> None:
     """RFC 2217, SET-BAUD: "the value is the baud rate being requested"; the access server answers
