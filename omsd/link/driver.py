@@ -35,6 +35,7 @@ Like every link here this is sans-I/O: bytes and the time go in, bytes come out.
 from __future__ import annotations
 
 from collections import deque
+from operator import attrgetter
 
 from omsd.board import (
     OVRT,
@@ -57,6 +58,7 @@ COMMENT = 0x2A  # "*"
 DEFAULT_EOS = 0x0A
 DEFAULT_BUFFER = 256
 _WAIT_NAMES = {WAIT_DONE: "done", WAIT_LIMIT: "limit"}
+_TEXT = attrgetter("text")  # a framed Reply's payload (_collect)
 
 
 def _is_control(b: int) -> bool:
@@ -158,6 +160,8 @@ class DriverLink:
         written after it reaches the board (an RA or a Control-Y would clear the register).
         What :meth:`to_host` would have done had the link been run then."""
         board = self.board
+        if board.at_rest(now):
+            return  # (fast path, issue 16: nothing is due by now, so nothing to serve)
         deadline = board.next_deadline()
         if deadline is not None and deadline <= now:
             board.advance(now)
@@ -336,7 +340,8 @@ class DriverLink:
     def to_host(self, now: float) -> LinkOutput:
         """Let the board run to ``now``; return what the host is to receive, and the events."""
         board = self.board
-        board.advance(now)
+        if not (now == board.now and board.at_rest(now)):  # (else advance would change nothing)
+            board.advance(now)
         # fast path (issue 16): with nothing held and nothing said, _pass_on has nothing to
         # pass on or collect (tests/link/test_link_fast_paths.py runs the link without it)
         if self._pending or board.has_output:
@@ -362,22 +367,27 @@ class DriverLink:
             return False
         # the fast path: nothing but framed replies (a poll's answers): each its text and the
         # end character, as collect_all gives them (with no event, there is nothing to reorder)
-        texts: list[bytes] = []
-        for item in out:
-            if not isinstance(item, Reply) or item.text is None:
-                return self.collect_all(out, sources, now)
-            texts.append(item.text)
-        pieces, eos, echoing = self._pieces, self.eos, self._echoing
+        eos = self.eos
+        try:
+            # the texts, joined in C: an event has no text (AttributeError), echoed characters
+            # have None (TypeError); only a Reply has the attribute
+            data = eos.join(map(_TEXT, out)) + eos
+        except (AttributeError, TypeError):
+            return self.collect_all(out, sources, now)
+        pieces, echoing = self._pieces, self._echoing
         source = sources[0]
         if not echoing and sources.count(source) == len(sources):
             # (one session's replies, no echo to end: merged one by one, they would be one
-            # piece all the same)
-            merge(pieces, source, eos.join(texts) + eos)
+            # piece all the same; to_host has usually taken the pieces before)
+            if pieces:
+                merge(pieces, source, data)
+            else:
+                pieces.append((source, data))
             return False
-        for text, source in zip(texts, sources, strict=True):
+        for item, source in zip(out, sources, strict=True):
             if source in echoing:
                 self._end_echo(source)
-            merge(pieces, source, text + eos)
+            merge(pieces, source, _TEXT(item) + eos)
         return False
 
     def collect_all(self, out: list[Output], sources: list[int], now: float) -> bool:
