@@ -233,9 +233,24 @@ class Board(Machine):
             if not (self.at_rest(now) and self.init_until is None):
                 return False
         interp = self.interpreter
-        ready = interp.bare_reports()
+        # a run of reports polled before, in this mode on this axis, is looked for first (the
+        # poll of a board; a plan is never of one word: those are found in ``ready``); with no
+        # contour or definition open, as ``bare_reports`` (None then) requires
+        plan = (
+            self._plans.get((data, interp.mode, interp.axis_index))
+            if interp.contour is None and interp.only is None
+            else None
+        )
+        ready = None if plan else interp.bare_reports()
         entry = ready.get(data) if ready is not None else None
-        if entry is not None:  # the usual case: one word, ready to run (run_bare, written out)
+        if plan:  # run by its plan
+            self.now = now
+            self.talker = self.input_source
+            self.rest_epoch += 1
+            self._run_plan(plan, now)
+            if self.settled and not self.deadline_stale:
+                return True  # still at rest: its deadline is the one at_rest looked at
+        elif entry is not None:  # one word, ready to run (run_bare, written out)
             handler, cell, command = entry
             self.now = now
             self.talker = self.input_source
@@ -251,16 +266,6 @@ class Board(Machine):
                 self.rest_epoch += 1  # it may have changed what a report says
             elif self.settled and not self.deadline_stale and self.deadline is None:
                 self._keep_reply(data, said)
-            if self.settled and not self.deadline_stale:
-                return True  # still at rest: its deadline is the one at_rest looked at
-        elif ready is not None and (
-            plan := self._plans.get((data, interp.mode, interp.axis_index))
-        ):
-            # a run of reports polled before, in this mode on this axis: run by its plan
-            self.now = now
-            self.talker = self.input_source
-            self.rest_epoch += 1
-            self._run_plan(plan, now)
             if self.settled and not self.deadline_stale:
                 return True  # still at rest: its deadline is the one at_rest looked at
         elif (word := (words := interp.report_words).get(data)) is not None:
@@ -328,8 +333,8 @@ class Board(Machine):
         """Run a run of reports by its plan (:meth:`_plan`): each word's handler, as
         ``Interpreter.run_bare`` calls it."""
         interp = self.interpreter
+        interp.depth = 0  # (once: a report or a selection runs no macro, and leaves it at 0)
         for handler, cell, command in plan:
-            interp.depth = 0
             try:
                 handler(interp, command, cell, now)
             except Blocked as exc:
