@@ -143,9 +143,11 @@ class DriverLink:
         no ``*``, ``!`` or ``@`` in the bytes, the driver has nothing to do but pass them on, so
         they go to the board as they are, without a stay in the buffer; what the board does not
         take waits there as it would have. The same steps as :meth:`_pass_on` takes for them."""
-        self._serve_due(now)
+        board = self.board
+        if not board.at_rest(now):  # (at rest, nothing is due by now: nothing to serve)
+            self._serve_due(now)
         taken = data[: self.buffer_size]
-        sent = self.board.receive(taken, now, session) if taken else 0
+        sent = board.receive(taken, now, session) if taken else 0
         if sent < len(taken):
             self._append(session, taken[sent:])
         touched = self._collect(now)
@@ -160,8 +162,6 @@ class DriverLink:
         written after it reaches the board (an RA or a Control-Y would clear the register).
         What :meth:`to_host` would have done had the link been run then."""
         board = self.board
-        if board.at_rest(now):
-            return  # (fast path, issue 16: nothing is due by now, so nothing to serve)
         deadline = board.next_deadline()
         if deadline is not None and deadline <= now:
             board.advance(now)

@@ -397,6 +397,23 @@ def test_the_driver_passes_a_report_straight_through_and_its_reply_in_one(
     assert calls["_pass_on"] == 0
 
 
+def test_a_poll_at_rest_neither_runs_the_board_nor_asks_its_deadline(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # issue 16: at rest, _straight_through serves nothing and to_host (the board already at the
+    # link's time) advances nothing; the two framed replies are one piece
+    link = ready("PC48-4E", "driver")
+    assert isinstance(link, DriverLink)
+    calls = spy(monkeypatch, link.board, "advance", "next_deadline")
+    for i in range(3):
+        assert link.from_host(b"AX QA RP;", 1.0 + i, 1) == 9
+        out = link.to_host(1.0 + i)
+        assert out.pieces == [(1, b"PNNN\n0\n")] and out.events == []
+    assert calls == {"advance": 0, "next_deadline": 0}
+    link.to_host(5.0)  # a later time: the board is run to it
+    assert calls["advance"] == 1
+
+
 @pytest.mark.parametrize(
     ("data", "why"),
     [
