@@ -246,7 +246,9 @@ class BoardService:
             client.finish()
 
     def _traffic(self, label: str, direction: Direction, data: bytes) -> None:
-        """A chunk of traffic for the log and the observers; no record is made for nobody."""
+        """A chunk of traffic for the log and the observers; no record is made for nobody (the
+        per-poll callers ask ``self.observers or self.log.wants_traffic`` first themselves, so
+        that a board nobody watches pays for no call)."""
         log = self.log
         observers = self.observers
         if not (observers or log.wants_traffic):
@@ -282,7 +284,8 @@ class BoardService:
             taken = self.link.from_host(data[:FEED_BITE], now, client.session)
             if taken:
                 self.active = client
-                self._traffic(client.label, Direction.IN, data[:taken])
+                if self.observers or log.wants_traffic:
+                    self._traffic(client.label, Direction.IN, data[:taken])
             if taken < len(data) and client not in self._waiting:
                 self._waiting.append(client)
             self._run(now)  # service() at the time the bytes were taken, already held
@@ -398,15 +401,26 @@ class BoardService:
                 for observer in list(self.observers):
                     observer.event(self, now, event)
         if out.pieces:
-            sending = [self._route(session, data) for session, data in out.pieces]
+            # each piece logged and given its client (its session's; the board's own, session
+            # 0, the last writer's); a piece whose client has gone is logged and discarded
+            log = self.log
+            live = self._live
+            sending: list[tuple[Client, bytes]] = []
+            for session, data in out.pieces:
+                client = live.get(session) if session else self.active
+                if client is None:
+                    self._discard(session, data)
+                    continue
+                if self.observers or log.wants_traffic:
+                    self._traffic(client.label, Direction.OUT, data)
+                sending.append((client, data))
             # the lines of this turn are in the file before any client can have a reply
-            self.log.write_kept()
+            log.write_kept()
             for client, data in sending:
-                if client is not None:
-                    if self._clean and self._out.idle:
-                        client.send(data)  # the fast path: nothing on the cable
-                    else:
-                        self._deliver(client, data)
+                if self._clean and self._out.idle:
+                    client.send(data)  # the fast path: nothing on the cable
+                else:
+                    self._deliver(client, data)
         if self._waiting:
             # never call back into a client from here: a client may be inside feed()
             room = self.link.room
@@ -423,22 +437,17 @@ class BoardService:
                     lingering.finish()
         self._reschedule()
 
-    def _route(self, session: int, data: bytes) -> tuple[Client | None, bytes]:
-        """Log the output of ``session`` and say where it goes: its client; the board's own (0)
-        to the last writer; ``None`` when that has gone."""
-        client = self._live.get(session) if session else self.active
-        if client is not None:
-            self._traffic(client.label, Direction.OUT, data)
-            return client, data
+    def _discard(self, session: int, data: bytes) -> None:
+        """Log the output of ``session`` whose client has gone (or, for the board's own, 0,
+        that has no last writer): it goes nowhere."""
         gone = self._gone.get(session) if session else None
         label = f"(gone: {gone})" if gone is not None else "(no client)"
         self._traffic(label, Direction.OUT, data)
         if gone is not None:
             self.log.info(f"{self.name}: discarded {len(data)} bytes for {gone}: it has gone")
-        return None, data
 
     def _reschedule(self) -> None:
-        if not self._closed and self.observers:
+        if self.observers and not self._closed:
             for observer in list(self.observers):
                 observer.changed(self)
         if self._closed:
@@ -454,10 +463,11 @@ class BoardService:
         # when, on the monotonic clock, the board is next to be woken (None: time is paused or
         # nothing happens by itself)
         at = None if deadline is None else self.timebase.to_loop(deadline)
-        if at == self._timer_at and self._timer is not None:
-            return  # woken then already
-        if self._timer is not None:
-            self._timer.cancel()
+        timer = self._timer
+        if timer is not None:
+            if at == self._timer_at:
+                return  # woken then already
+            timer.cancel()
             self._timer = None
             self._timer_at = None
         if at is None:
