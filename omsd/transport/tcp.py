@@ -56,6 +56,10 @@ class TcpClient(asyncio.BufferedProtocol):
         if terminal:
             board = service.board
             self.terminal = terminal_for(service.link, lambda: board.interpreter.echo)
+        else:
+            # with no line editing the board's output goes to the socket as it is: send is
+            # _write itself, one call less on every reply (issue 16)
+            self.send = self._write  # type: ignore[method-assign]
         self.label = endpoint
         self.session = 0
         self.transport: asyncio.Transport | None = None
@@ -181,6 +185,8 @@ class TcpClient(asyncio.BufferedProtocol):
         self._push()
 
     def send(self, data: bytes) -> None:
+        """The board's output for the client (with the terminal option: as the terminal shows
+        it). Without the option each connection's ``send`` is :meth:`_write` (see __init__)."""
         if self.terminal is not None:
             data = self.terminal.shown(data)
         self._write(data)
