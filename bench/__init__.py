@@ -27,5 +27,6 @@ The benchmarks:
 * :mod:`bench.peers`      other simulators beside omsd (``--peers`` only).
 
 Beside the table, :mod:`bench.instructions` counts the machine instructions of one poll of the
-load's board in the engine (valgrind): a figure that does not move with the machine's load.
+load's board in the engine (valgrind): a figure that does not move with the machine's load;
+:mod:`bench.opcodes` the bytecodes of one poll in the daemon's loop, by file and function.
 """

@@ -250,6 +250,20 @@ def test_instructions_per_poll_are_counted(
     assert int(found[1].replace(",", "")) > 1000
 
 
+def test_opcodes_per_poll_are_counted(capsys: pytest.CaptureFixture[str]) -> None:
+    """``python -m bench.opcodes`` (a developer's tool, not a row): the daemon in the process,
+    its loop's thread traced, the bytecodes per poll by file."""
+    from bench import opcodes
+
+    assert opcodes.main(["-n", "2", "-r", "3", "--period", "0.01", "--top", "3", "--lines"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("2 boards (at rest), 6 polls: bytecodes per poll\n"), out
+    own = re.search(r"^ +([\d.]+)  the daemon's own path$", out, re.MULTILINE)
+    assert own is not None, out
+    assert float(own[1]) > 100
+    assert "omsd/service.py:" in out
+
+
 def test_an_unknown_variant_of_the_instruction_count_is_refused() -> None:
     result = bench("bench.instructions", "nope", timeout=60)
     assert result.returncode == 2
