@@ -56,9 +56,10 @@ class TcpClient(asyncio.BufferedProtocol):
         if terminal:
             board = service.board
             self.terminal = terminal_for(service.link, lambda: board.interpreter.echo)
-        else:
+        elif type(self).send is TcpClient.send:
             # with no line editing the board's output goes to the socket as it is: send is
-            # _write itself, one call less on every reply (issue 16)
+            # _write itself, one call less on every reply (issue 16); a subclass with a send
+            # of its own (RFC 2217's, which paces) keeps it
             self.send = self._write  # type: ignore[method-assign]
         self.label = endpoint
         self.session = 0
