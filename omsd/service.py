@@ -404,10 +404,9 @@ class BoardService:
             # each piece logged and given its client (its session's; the board's own, session
             # 0, the last writer's); a piece whose client has gone is logged and discarded
             log = self.log
-            live = self._live
             sending: list[tuple[Client, bytes]] = []
             for session, data in out.pieces:
-                client = live.get(session) if session else self.active
+                client = self._live.get(session) if session else self.active
                 if client is None:
                     self._discard(session, data)
                     continue
