@@ -16,7 +16,7 @@ straightforward way.
 from __future__ import annotations
 
 from omsd.engine.axis_state import AxisState
-from omsd.engine.counter import count_at
+from omsd.engine.counter import count_velocity
 from omsd.engine.states import Motion
 from omsd.engine.world import LimitWiring, SwitchType
 
@@ -43,11 +43,12 @@ def status_inputs(axis: AxisState, t: float) -> tuple[int, bool, bool]:
         d = axis.heading(t)
         carriage = axis.carriage(t)
         return d, axis.limit_active(d, t, carriage), axis.home_sensed(t, carriage)
-    traj = axis.traj
-    x, v = traj.position_velocity(t)
+    if axis.motion is _IDLE:
+        x, v = axis.traj.position_velocity(t)
+    else:  # a moving carriage is at its last whole step (AxisState.carriage)
+        count, v = count_velocity(axis.traj, t)
+        x = float(count)
     d = 1 if v > 0 else -1 if v < 0 else axis.direction
-    if axis.motion is not _IDLE:
-        x = float(count_at(traj, t))
     p = x + axis.phys_offset
     limit = p >= w.positive_limit if d > 0 else p <= w.negative_limit
     home = w.home_low <= p < w.home_high

@@ -55,6 +55,18 @@ def count_at(traj: Trajectory, t: float) -> int:
     return count
 
 
+def count_velocity(traj: Trajectory, t: float) -> tuple[int, float]:
+    """:func:`count_at` and the velocity at ``t`` on ``traj`` together, the piece running then
+    found once (:meth:`Trajectory.position_velocity`): a status of a moving axis asks for both
+    (its carriage and its direction), and the count is kept as :func:`count_at` keeps it, for
+    RP's counter at the same instant to read."""
+    x, v = traj.position_velocity(t)
+    seen = traj.count_seen
+    if seen[0] != t:
+        seen = traj.count_seen = (t, counted(traj, x, t))
+    return seen[1], v
+
+
 def _onward_from(x: float, way: float) -> int:
     """The count at ``x`` where a motion from rest leaves the ``way`` way."""
     eps = 1e-6
