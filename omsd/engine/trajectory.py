@@ -181,8 +181,20 @@ class Trajectory:
     def position_velocity(self, t: float) -> tuple[float, float]:
         """``(position(t), velocity(t))``, the piece running at ``t`` found once (a status
         asks for both): the same numbers, to the last bit."""
-        if not self.pieces:  # (at rest: x0 up to t0, then final)
+        pieces = self.pieces
+        if not pieces:  # (at rest: x0 up to t0, then final)
             return (self.x0 if t <= self.t0 else self.final), 0.0
+        rel = t - self.t0
+        if 0.0 < rel < self.duration and t < self.end_time:
+            # fast path (issue 16): within a piece, where position() computes the position
+            # itself (no end to rest at; a kept position, if any, is the same number)
+            starts = self._starts
+            i = bisect.bisect_right(starts, rel) - 1
+            piece = pieces[i]
+            tau = rel - starts[i]
+            x = self._offsets[i] + piece.x(tau)
+            self._seen = (t, x)
+            return x, piece.v(tau)
         i, tau = self._locate(t)
         if i < 0:
             return self.position(t), 0.0

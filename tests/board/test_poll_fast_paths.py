@@ -1,5 +1,5 @@
 """The readings a status poll makes on its fast path say what the straightforward ones say
-(issue 16): ``Trajectory.position_velocity``, ``counter.count_at`` and
+(issue 16): ``Trajectory.position_velocity``, ``counter.count_at``, ``counter.count_velocity`` and
 ``axis_status.status_inputs``, to the last bit, around the switches and the ends of motion; and
 a run of reports polled again and again, run by its kept plan, says what the straightforward
 board says."""
@@ -18,7 +18,7 @@ from omsd.board import Board
 from omsd.board.world import AxisWorld
 from omsd.engine.axis_state import AxisState
 from omsd.engine.axis_status import status_inputs
-from omsd.engine.counter import count_at, counted
+from omsd.engine.counter import count_at, count_velocity, counted
 from omsd.engine.pieces import cruise
 from omsd.engine.ramps import RampShape, move_pieces
 from omsd.engine.trajectory import Trajectory
@@ -42,10 +42,13 @@ def test_position_velocity_and_the_kept_count_are_the_computed_ones(
         pieces = [*pieces, cruise(jog)]
     traj = Trajectory(t0, x0, pieces, None if jog is not None else x0 + distance)
     plain = Trajectory(t0, x0, pieces, traj.final)
+    both = Trajectory(t0, x0, pieces, traj.final)  # (count_velocity's own kept count)
     ends = [0.0, traj.duration] if traj.is_finite else [0.0]
     for t in [t0 + dt for dt in times + ends + times[:1]]:  # (one instant twice: kept)
         assert traj.position_velocity(t) == (plain.position(t), plain.velocity(t))
         assert count_at(traj, t) == counted(plain, plain.position(t), t)
+        assert count_velocity(both, t) == (count_at(traj, t), plain.velocity(t))
+        assert count_at(both, t) == count_at(traj, t)
         assert traj.position(t) == plain.position(t)
         rest = Trajectory.at_rest(t0, x0 + distance)  # (no pieces)
         assert rest.position_velocity(t) == (rest.position(t), rest.velocity(t))
