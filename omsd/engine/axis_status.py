@@ -45,9 +45,8 @@ def status_inputs(axis: AxisState, t: float) -> tuple[int, bool, bool]:
         return d, axis.limit_active(d, t, carriage), axis.home_sensed(t, carriage)
     if axis.motion is _IDLE:
         x, v = axis.traj.position_velocity(t)
-    else:  # a moving carriage is at its last whole step (AxisState.carriage)
-        count, v = count_velocity(axis.traj, t)
-        x = float(count)
+    else:  # a moving carriage is at its last whole step (AxisState.carriage): x, the count
+        x, v = count_velocity(axis.traj, t)
     d = 1 if v > 0 else -1 if v < 0 else axis.direction
     p = x + axis.phys_offset
     limit = p >= w.positive_limit if d > 0 else p <= w.negative_limit

@@ -62,9 +62,16 @@ def count_velocity(traj: Trajectory, t: float) -> tuple[int, float]:
     RP's counter at the same instant to read."""
     x, v = traj.position_velocity(t)
     seen = traj.count_seen
-    if seen[0] != t:
-        seen = traj.count_seen = (t, counted(traj, x, t))
-    return seen[1], v
+    if seen[0] == t:
+        return seen[1], v
+    if traj.count is None and not traj.turns and x != traj.x0:
+        # fast path (issue 16): the motion most polled, from rest and one way (a jog, a queued
+        # move), away from its start: counted's last rule, whole steps the way it has gone
+        count = math.floor(x + 1e-6) if x > traj.x0 else math.ceil(x - 1e-6)
+    else:
+        count = counted(traj, x, t)
+    traj.count_seen = (t, count)
+    return count, v
 
 
 def _onward_from(x: float, way: float) -> int:

@@ -33,16 +33,26 @@ from omsd.models import MODELS, get_model
     t0=st.sampled_from([0.0, 0.1, 12.345]),
     x0=st.sampled_from([0.0, -40.12, 700.195, 1e6 + 0.5]),
     times=st.lists(st.floats(-0.5, 5.0), min_size=1, max_size=6),
+    taken_over=st.sampled_from([None, -1, 0, 1]),
 )
 def test_position_velocity_and_the_kept_count_are_the_computed_ones(
-    distance: int, jog: float | None, t0: float, x0: float, times: list[float]
+    distance: int,
+    jog: float | None,
+    t0: float,
+    x0: float,
+    times: list[float],
+    taken_over: int | None,
 ) -> None:
+    """``taken_over``: the trajectory took over from a motion whose count was ``x0`` rounded
+    plus this (``Trajectory.count``), or begins from rest (None)."""
     pieces = move_pieces(float(distance), 5000.0, 50000.0, 0.0, RampShape())
     if jog is not None:
         pieces = [*pieces, cruise(jog)]
-    traj = Trajectory(t0, x0, pieces, None if jog is not None else x0 + distance)
-    plain = Trajectory(t0, x0, pieces, traj.final)
-    both = Trajectory(t0, x0, pieces, traj.final)  # (count_velocity's own kept count)
+    count = None if taken_over is None else round(x0) + taken_over
+    final = None if jog is not None else x0 + distance
+    traj = Trajectory(t0, x0, pieces, final, count)
+    plain = Trajectory(t0, x0, pieces, traj.final, count)
+    both = Trajectory(t0, x0, pieces, traj.final, count)  # (count_velocity's own kept count)
     ends = [0.0, traj.duration] if traj.is_finite else [0.0]
     for t in [t0 + dt for dt in times + ends + times[:1]]:  # (one instant twice: kept)
         assert traj.position_velocity(t) == (plain.position(t), plain.velocity(t))
