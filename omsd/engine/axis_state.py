@@ -273,7 +273,9 @@ class AxisState:
         """The position register: whole steps emitted so far."""
         if self.motion is _IDLE:
             return math.floor(self.traj.position(t) + 0.5)
-        return count_at(self.traj, t)
+        # RP after QA (issue 16): the count the status found at this instant, kept (count_at)
+        seen = self.traj.count_seen
+        return seen[1] if seen[0] == t else count_at(self.traj, t)
 
     def velocity(self, t: float) -> float:
         return self.traj.velocity(t)
