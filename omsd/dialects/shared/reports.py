@@ -53,7 +53,12 @@ def _rp(ix: Interpreter, cmd: Command, cell: Cell, t: float) -> None:
         machine = ix.machine
         machine.reply_number(machine.axes[ix.axis_index].counter(t), t)
     else:
-        _list(ix, lambda a: str(a.counter(t)), t)
+        _counters(ix, t)
+
+
+def _counters(ix: Interpreter, t: float) -> None:
+    """RP's list (apart from _rp: a closure over ``t`` there costs the single-axis RP a cell)."""
+    _list(ix, lambda a: str(a.counter(t)), t)
 
 
 @handles("RQ")
