@@ -64,7 +64,10 @@ def count_velocity(traj: Trajectory, t: float) -> tuple[int, float]:
     seen = traj.count_seen
     if seen[0] == t:
         return seen[1], v
-    if traj.count is None and not traj.turns and x != traj.x0:
+    plain = traj.one_way_from_rest
+    if plain is None:
+        plain = traj.one_way_from_rest = traj.count is None and not traj.turns
+    if plain and x != traj.x0:
         # fast path (issue 16): the motion most polled, from rest and one way (a jog, a queued
         # move), away from its start: counted's last rule, whole steps the way it has gone
         count = math.floor(x + 1e-6) if x > traj.x0 else math.ceil(x - 1e-6)

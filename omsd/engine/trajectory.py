@@ -55,6 +55,7 @@ class Trajectory:
         "duration",
         "end_time",
         "final",
+        "one_way_from_rest",
         "pieces",
         "t0",
         "x0",
@@ -94,6 +95,9 @@ class Trajectory:
         self._seen = _NOT_SEEN
         # the last position counter found (omsd.engine.counter.count_at), kept as _seen is
         self.count_seen: tuple[float, int] = _NOT_COUNTED
+        # from rest (no count taken over) and never turning: counted by the start alone
+        # (omsd.engine.counter.count_velocity); None until asked
+        self.one_way_from_rest: bool | None = None if count is None else False
 
     @classmethod
     def at_rest(cls, t0: float, x: float) -> Trajectory:
@@ -138,6 +142,7 @@ class Trajectory:
             lowest, highest = min(lowest, final), max(highest, final)
         traj._extent = (lowest, highest)
         traj._turns = course.turns
+        traj.one_way_from_rest = not course.turns
         traj._seen = _NOT_SEEN
         traj.count_seen = _NOT_COUNTED
         return traj

@@ -21,7 +21,7 @@ from omsd.engine.axis_status import status_inputs
 from omsd.engine.counter import count_at, count_velocity, counted
 from omsd.engine.pieces import cruise
 from omsd.engine.ramps import RampShape, move_pieces
-from omsd.engine.trajectory import Trajectory
+from omsd.engine.trajectory import Course, Trajectory
 from omsd.engine.world import SwitchType
 from omsd.models import MODELS, get_model
 
@@ -246,3 +246,20 @@ def test_a_move_in_its_last_instant_is_where_it_ends_not_where_its_last_piece_be
     twin.take_output()
     twin.receive(b"RP;", math.nextafter(end, 0.0))
     assert [reply.text for reply in twin.take_output()] == [b"1000"]
+
+
+@pytest.mark.parametrize("distance", [3000.0, -3000.0, 0.4, None])
+def test_a_course_from_rest_counts_as_the_trajectory_it_is(distance: float | None) -> None:
+    """``Trajectory.one_way_from_rest`` of a trajectory along a kept course is the one its own
+    pieces give (count_velocity's fast path counts by it), and so is the count; None: a course
+    that turns."""
+    if distance is None:
+        pieces = [cruise(100.0, 0.3), cruise(-100.0, 0.4)]
+        distance = -10.0
+    else:
+        pieces = move_pieces(distance, 5000.0, 50000.0, 0.0, RampShape())
+    along = Trajectory.along(1.0, -40.12, Course(pieces), -40.12 + distance)
+    plain = Trajectory(1.0, -40.12, pieces, -40.12 + distance)
+    assert along.one_way_from_rest == (plain.count is None and not plain.turns)
+    for t in (1.0, 1.01, 1.2, 1.5, along.end_time):
+        assert count_velocity(along, t) == (counted(plain, plain.position(t), t), plain.velocity(t))
