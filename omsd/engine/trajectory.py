@@ -192,14 +192,13 @@ class Trajectory:
         rel = t - self.t0
         if 0.0 < rel < self.duration and t < self.end_time:
             # fast path (issue 16): within a piece, where position() computes the position
-            # itself (no end to rest at; a kept position, if any, is the same number)
+            # itself (no end to rest at; a kept position, if any, is the same number). Not
+            # kept: a status's count is (counter.count_velocity), and RP reads that
             starts = self._starts
             i = bisect.bisect_right(starts, rel) - 1
             piece = pieces[i]
             tau = rel - starts[i]
-            x = self._offsets[i] + piece.x(tau)
-            self._seen = (t, x)
-            return x, piece.v(tau)
+            return self._offsets[i] + piece.x(tau), piece.v(tau)
         i, tau = self._locate(t)
         if i < 0:
             return self.position(t), 0.0
