@@ -251,17 +251,11 @@ class Board(Machine):
             if self.settled and not self.deadline_stale:
                 return True  # still at rest: its deadline is the one at_rest looked at
         elif entry is not None:  # one word, ready to run (run_bare, written out)
-            handler, cell, command = entry
+            command = entry[2]
             self.now = now
             self.talker = self.input_source
-            interp.depth = 0
             said = len(self._output)
-            try:
-                handler(interp, command, cell, now)
-            except Blocked as exc:
-                raise AssertionError(f"{command.mnemonic}, a report, waited") from exc
-            except (CommandFailed, OperandError) as exc:
-                self.command_error(exc.kind, command.text, now)
+            self._run_plan((entry,), now)  # (a plan of one word)
             if command.mnemonic not in self.pure_reports:
                 self.rest_epoch += 1  # it may have changed what a report says
             elif self.settled and not self.deadline_stale and self.deadline is None:
@@ -329,7 +323,7 @@ class Board(Machine):
             plan = [(*e, w) for e, (_, w) in zip(entries, found, strict=True) if e is not None]
             plans[key] = plan if len(plan) == len(found) else []
 
-    def _run_plan(self, plan: list[BareReport], now: float) -> None:
+    def _run_plan(self, plan: Sequence[BareReport], now: float) -> None:
         """Run a run of reports by its plan (:meth:`_plan`): each word's handler, as
         ``Interpreter.run_bare`` calls it."""
         interp = self.interpreter

@@ -39,8 +39,7 @@ def counted(traj: Trajectory, x: float, t: float) -> int:
     origin = traj.x0
     if x == origin and traj.way < 0.0:
         return math.ceil(x - 1e-6)
-    # steps(x, origin), written out (a poll of a moving axis asks twice)
-    return math.floor(x + 1e-6) if x >= origin else math.ceil(x - 1e-6)
+    return steps(x, origin)
 
 
 def count_at(traj: Trajectory, t: float) -> int:

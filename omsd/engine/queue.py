@@ -107,17 +107,9 @@ class CommandQueue:
 
     def advance(self, ops: int = 1) -> None:
         """Pass the current op (and ``ops - 1`` after it), reclaiming their slots: as that many
-        single advances would. (:meth:`reclaim` written out: a queued move's end passes two.)"""
-        pc = self.pc = self.pc + ops
-        if self.loops or pc == 0:
-            return
-        program = self.program
-        used = self.used
-        for op in program[:pc]:
-            used -= op.slots
-        del program[:pc]
-        self.used = used
-        self.pc = 0
+        single advances would."""
+        self.pc += ops
+        self.reclaim()
 
     def jump(self, index: int) -> None:
         self.pc = index

@@ -301,19 +301,9 @@ class Rfc2217Client(TcpClient):
         transmission of both data and commands until the FLOWCONTROL-RESUME"."""
         held = self._held
         if held is None:
-            transport = self.transport
-            if transport is None or transport.is_closing():
-                return
-            if transport.get_write_buffer_size() > MAX_PENDING_OUTPUT:
-                # a client that asks (every query is answered) and never reads: its answers
-                # are dropped as the board's output is, not buffered without end
-                if not self._dropping:
-                    self._dropping = True
-                    self.service.log.warning(
-                        f"{self.service.name}: {self.label} is not reading; dropping output"
-                    )
-                return
-            transport.write(data)
+            # the socket's own bound: a client that asks (every query is answered) and never
+            # reads has its answers dropped as the board's output is (TcpClient._write)
+            super()._write(data)
         elif len(held) + len(data) <= MAX_PENDING_OUTPUT:
             held += data
         elif not self._held_dropping:

@@ -8,6 +8,7 @@ import json
 import os
 import stat
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,7 @@ from omsd.board import AxisWorld, LimitWiring, SwitchType
 from omsd.config import BoardConfig
 from omsd.recording import format as format_module
 from omsd.recording.format import (
+    Recording,
     RecordingError,
     RecordingWriter,
     board_from_record,
@@ -189,19 +191,33 @@ def test_what_is_not_a_recording_file_is_refused_without_reading_it(tmp_path: Pa
         read_recording(fifo)
 
 
+def through_pipe(*writes: bytes, pause: float = 0.0) -> Recording:
+    """``read_recording`` of a pipe's /dev/fd path (``omsd replay <(zcat run.jsonl.gz)``), its
+    writer writing ``writes`` one after the other, ``pause`` seconds apart, then closing it."""
+    r, w = os.pipe()
+
+    def write_all() -> None:
+        for k, data in enumerate(writes):
+            if k:
+                time.sleep(pause)
+            os.write(w, data)
+        os.close(w)
+
+    writer = threading.Thread(target=write_all)
+    writer.start()
+    try:
+        return read_recording(f"/dev/fd/{r}")
+    finally:
+        writer.join()
+        os.close(r)
+
+
 def test_a_recording_through_a_pipe_is_read(tmp_path: Path) -> None:
     # ``omsd replay <(zcat run.jsonl.gz)``: the shell gives a pipe's /dev/fd path
     path = tmp_path / "session.jsonl"
     write(path)
     expected = read_recording(path)
-    r, w = os.pipe()
-    writer = threading.Thread(target=lambda: (os.write(w, path.read_bytes()), os.close(w)))
-    writer.start()
-    try:
-        got = read_recording(f"/dev/fd/{r}")
-    finally:
-        writer.join()
-        os.close(r)
+    got = through_pipe(path.read_bytes())
     assert got.chunks == expected.chunks and got.header == expected.header
 
 
@@ -326,14 +342,7 @@ def test_a_compressed_log_is_read_as_it_is(tmp_path: Path) -> None:
     got = read_recording(packed)
     assert got.chunks == expected.chunks and got.header == expected.header and not got.cut
     # through a pipe too (cat session.jsonl.gz | omsd replay /dev/stdin)
-    r, w = os.pipe()
-    writer = threading.Thread(target=lambda: (os.write(w, packed.read_bytes()), os.close(w)))
-    writer.start()
-    try:
-        assert read_recording(f"/dev/fd/{r}").chunks == expected.chunks
-    finally:
-        writer.join()
-        os.close(r)
+    assert through_pipe(packed.read_bytes()).chunks == expected.chunks
     # a compressed file cut short (a copy or a compression that was stopped): what is there
     long = tmp_path / "long.jsonl"
     writer = RecordingWriter(long)
@@ -357,27 +366,12 @@ def test_a_compressed_pipe_whose_first_read_is_one_byte_is_read_as_gzip(tmp_path
     # that flushes as it goes, a slow ssh) was taken for no gzip and the whole file read as text,
     # 'not a JSON object'. The magic is read in as many reads as it comes in.
     import gzip
-    import time
 
     path = tmp_path / "session.jsonl"
     write(path)
     expected = read_recording(path)
     packed = gzip.compress(path.read_bytes())
-    r, w = os.pipe()
-
-    def trickle() -> None:
-        os.write(w, packed[:1])
-        time.sleep(0.3)
-        os.write(w, packed[1:])
-        os.close(w)
-
-    writer = threading.Thread(target=trickle)
-    writer.start()
-    try:
-        assert read_recording(f"/dev/fd/{r}").chunks == expected.chunks
-    finally:
-        writer.join()
-        os.close(r)
+    assert through_pipe(packed[:1], packed[1:], pause=0.3).chunks == expected.chunks
     # a file of one byte, that byte the magic's first: read as text (blank), not a gzip error
     one = tmp_path / "one.jsonl"
     one.write_bytes(b"\x1f")
